@@ -1,0 +1,17 @@
+// The ravel command line: one executable, one function per sub-command.
+// Each takes the arguments after the sub-command name and returns the exit code.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace ravel::app {
+
+using Args = std::vector<std::string>;
+
+int cmd_run(const Args& args);        // app/cmd_run.cpp
+int cmd_snapshot(const Args& args);   // app/cmd_snapshot.cpp
+int cmd_gui(const Args& args);        // app/cmd_gui.cpp
+int cmd_keys(const Args& args);       // app/cmd_run.cpp: list scene keys
+
+}  // namespace ravel::app

@@ -1,0 +1,39 @@
+// The energy ledger (SPEC §8). Every entry is computed from its own mechanism: kinetic
+// energies from velocities, stored energy from element state, dissipations from the
+// work of the force or the kinetic-energy change that a correction made. None is the
+// remainder of the others, so their sum against the initial energy checks the solver.
+#pragma once
+
+namespace ravel {
+
+struct Ledger {
+  double projectile_ke_J = 0;            // kinetic energy of the projectile
+  double fabric_ke_J = 0;                // kinetic energy of the yarn nodes
+  double strain_energy_J = 0;            // stored: elastic springs of the yarn elements + bending springs
+  double viscous_J = 0;                  // dissipated by the Zener dashpots (integral of mu_d de_v/dt^2)
+  double friction_work_J = 0;            // dissipated by yarn-yarn friction (Eq 12-15)
+  double projectile_friction_J = 0;      // dissipated by projectile-yarn friction (Eq 20-22)
+  double contact_loss_J = 0;             // kinetic energy removed by the normal contact corrections (Eq 9-11, 19)
+  double released_J = 0;                 // energy held by elements at the moment they broke
+  double clamp_work_J = 0;               // work absorbed by clamped nodes (zero: clamps do not move)
+
+  double total() const {
+    return projectile_ke_J + fabric_ke_J + strain_energy_J + viscous_J + friction_work_J +
+           projectile_friction_J + contact_loss_J + released_J + clamp_work_J;
+  }
+  Ledger scaled(double f) const {
+    Ledger l = *this;
+    l.projectile_ke_J *= f;
+    l.fabric_ke_J *= f;
+    l.strain_energy_J *= f;
+    l.viscous_J *= f;
+    l.friction_work_J *= f;
+    l.projectile_friction_J *= f;
+    l.contact_loss_J *= f;
+    l.released_J *= f;
+    l.clamp_work_J *= f;
+    return l;
+  }
+};
+
+}  // namespace ravel

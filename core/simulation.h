@@ -1,0 +1,107 @@
+// Simulation: the public face of the core. Builds the model a scene needs (quarter /
+// half / full, sliding / pin-jointed), steps it, records the time history and the
+// energy ledger, detects perforation, rebound and divergence, and hands out Frames.
+//
+// It owns no thread: callers (the CLI, the app's worker, tests, benchmarks) call step()
+// or run() from whatever thread they like, one thread at a time.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "frame.h"
+#include "ledger.h"
+#include "scene.h"
+
+namespace ravel {
+
+enum class RunStatus { running, completed, diverged, interrupted };
+enum class EndReason { none, perforated, rebounded, end_time, diverged, interrupted };
+
+const char* to_string(RunStatus s);
+const char* to_string(EndReason r);
+
+// One row of history.csv. Energies are for the whole fabric (a quarter model's are x4).
+struct HistoryRow {
+  double t_s = 0;
+  double projectile_z_m = 0, projectile_velocity_mps = 0;  // velocity along the flight path (+ = into the fabric)
+  Ledger ledger;                                           // energies in J
+  double balance_error = 0;                                // (sum of ledger - initial) / initial
+  int broken_warp = 0, broken_weft = 0;                    // broken elements per family (whole fabric)
+  double max_strain = 0;
+  double projectile_contact_force_N = 0;                   // magnitude, whole projectile
+  double yarn_contact_force_N = 0;                         // sum of yarn-yarn normal forces (whole fabric)
+  int nodes_on_projectile = 0;
+  int sliding_crossings = 0, stuck_crossings = 0;          // whole fabric; 0 for pin-jointed
+};
+
+struct Summary {
+  std::string scene_name;
+  RunStatus status = RunStatus::running;
+  EndReason end_reason = EndReason::none;
+  std::string diagnosis;               // why it diverged / was interrupted, in words
+  bool perforated = false;
+  double impact_velocity_mps = 0;
+  double residual_velocity_mps = 0;    // speed along the flight path at the end (perforation: exit speed)
+  double energy_absorbed_J = 0;        // M (V0^2 - Vr^2) / 2
+  double perforation_time_s = -1;      // < 0: none
+  double energy_balance_error = 0;     // worst |balance error| over the run
+  double friction_work_J = 0;          // yarn-yarn friction work
+  std::string model;                   // quarter | half | full
+  std::string model_reason;            // why that model
+  std::string contact_model;           // sliding | pin_jointed
+  int node_count = 0, element_count = 0, crossing_count = 0;
+  long step_count = 0;
+  double dt_s = 0;
+  double end_time_s = 0;
+  double wall_time_s = 0;
+  double node_steps_per_s = 0;
+  int broken_warp = 0, broken_weft = 0;
+  int broken_warp_yarns = 0, broken_weft_yarns = 0;  // yarns with at least one broken element
+  double max_strain = 0;
+  std::vector<std::string> warnings;
+};
+
+class Solver;  // core/solver.h
+
+class Simulation {
+ public:
+  explicit Simulation(const Scene& scene);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  // Advance one time step. Returns false when the run is over (see summary().status).
+  bool step();
+  // Run until done, or until `interrupt` becomes true. `on_sample` is called after each
+  // history sample (progress display).
+  void run(const std::atomic<bool>* interrupt = nullptr,
+           const std::function<void(const Simulation&)>& on_sample = {});
+  // Mark the run interrupted (Ctrl-C) and finish the summary.
+  void interrupt(const std::string& why);
+
+  bool finished() const;
+  double time_s() const;
+  long step_count() const;
+  double dt_s() const;
+  const Scene& scene() const;
+  const std::vector<HistoryRow>& history() const;
+  Summary summary() const;
+  Frame frame() const;
+  // A hash of the full dynamic state (positions, velocities, internal variables), for
+  // determinism checks.
+  std::uint64_t state_hash() const;
+
+  // Direct access for tests and studies.
+  const Solver& solver() const;
+  Solver& solver();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ravel
