@@ -1,0 +1,72 @@
+// Colour maps, written out by hand as key points (linear interpolation between them).
+// turbo: a rainbow with monotonic lightness in each half, reads well on a dark
+// background; viridis: perceptually uniform, for colour-blind safe figures.
+#include <algorithm>
+#include <cmath>
+
+#include "render/renderer.h"
+
+namespace ravel::render {
+
+namespace {
+
+constexpr float kTurbo[][3] = {{0.19f, 0.07f, 0.23f}, {0.27f, 0.44f, 0.92f}, {0.15f, 0.69f, 0.98f},
+                               {0.10f, 0.87f, 0.78f}, {0.30f, 0.98f, 0.49f}, {0.64f, 0.99f, 0.24f},
+                               {0.89f, 0.87f, 0.21f}, {0.99f, 0.65f, 0.15f}, {0.94f, 0.38f, 0.07f},
+                               {0.78f, 0.16f, 0.02f}, {0.48f, 0.02f, 0.01f}};
+
+constexpr float kViridis[][3] = {{0.267f, 0.005f, 0.329f}, {0.253f, 0.265f, 0.530f},
+                                 {0.164f, 0.471f, 0.558f}, {0.135f, 0.659f, 0.518f},
+                                 {0.478f, 0.821f, 0.318f}, {0.993f, 0.906f, 0.144f}};
+
+template <int N>
+Vec3 sample(const float (&table)[N][3], float t) {
+  if (!(t >= 0)) t = 0;  // also catches NaN
+  t = std::min(t, 1.0f) * (N - 1);
+  const int i = std::min(static_cast<int>(t), N - 2);
+  const float f = t - i;
+  return {table[i][0] + f * (table[i + 1][0] - table[i][0]),
+          table[i][1] + f * (table[i + 1][1] - table[i][1]),
+          table[i][2] + f * (table[i + 1][2] - table[i][2])};
+}
+
+}  // namespace
+
+Vec3 colormap(ColorMap map, float t) {
+  return map == ColorMap::viridis ? sample(kViridis, t) : sample(kTurbo, t);
+}
+
+const char* to_string(ColorField f) {
+  switch (f) {
+    case ColorField::strain:
+      return "strain";
+    case ColorField::velocity:
+      return "velocity";
+    case ColorField::sliding:
+      return "sliding";
+  }
+  return "?";
+}
+
+bool parse_color_field(const std::string& name, ColorField* out) {
+  for (ColorField f : {ColorField::strain, ColorField::velocity, ColorField::sliding})
+    if (name == to_string(f)) {
+      *out = f;
+      return true;
+    }
+  return false;
+}
+
+const char* field_title(ColorField f) {
+  switch (f) {
+    case ColorField::strain:
+      return "strain / failure strain";
+    case ColorField::velocity:
+      return "yarn speed (m/s)";
+    case ColorField::sliding:
+      return "sliding speed (m/s)";
+  }
+  return "";
+}
+
+}  // namespace ravel::render
