@@ -1,0 +1,45 @@
+// Small shared argument handling for the sub-commands: `[SCENE] [--set k=v ...]
+// [--out DIR] [--threads N]` plus each command's own flags.
+#pragma once
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "scene.h"
+
+namespace ravel::app {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct CommonArgs {
+  std::string scene_path;                  // "" = default scene
+  std::vector<std::string> overrides;      // --set k=v, in order
+  std::string out_dir;
+  int threads = -1;                        // -1: as the scene says
+  std::map<std::string, std::string> flags;           // --name value / --name=value (last wins)
+  std::map<std::string, std::vector<std::string>> multi;  // every value of repeatable flags
+  std::vector<std::string> switches;       // --name without value
+};
+
+// `value_flags`: flags that take a value; `switch_flags`: flags without; `repeatable`:
+// value flags that may repeat. Throws UsageError for anything else.
+CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<std::string>& value_flags,
+                      const std::vector<std::string>& switch_flags = {},
+                      const std::vector<std::string>& repeatable = {});
+
+// Load the scene the arguments name (default scene when none), with --set and --threads.
+Scene load_scene_from(const CommonArgs& a);
+
+bool has_switch(const CommonArgs& a, const std::string& name);
+
+// Print an error in the one-line house style and return the exit code for it.
+int report_error(const std::exception& e);
+
+enum ExitCode { exit_ok = 0, exit_failure = 1, exit_usage = 2, exit_diverged = 3, exit_interrupted = 130 };
+
+}  // namespace ravel::app

@@ -1,0 +1,82 @@
+// `ravel run [SCENE] [--set k=v ...] --out DIR`: one headless run, written as
+// DIR/history.csv, DIR/summary.json and DIR/scene.toml.
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+
+#include "cli.h"
+#include "commands.h"
+#include "results.h"
+#include "simulation.h"
+
+namespace ravel::app {
+
+namespace {
+std::atomic<bool> g_interrupt{false};
+extern "C" void on_signal(int) { g_interrupt.store(true); }
+}  // namespace
+
+std::atomic<bool>& interrupt_flag() { return g_interrupt; }
+
+void install_signal_handlers() {
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+}
+
+void print_summary_line(const Summary& s, const std::string& out_dir) {
+  std::printf("%s: %s (%s), model %s %s, %d nodes, %ld steps in %.2f s\n", s.scene_name.c_str(), to_string(s.status),
+              to_string(s.end_reason), s.model.c_str(), s.contact_model.c_str(), s.node_count, s.step_count,
+              s.wall_time_s);
+  if (s.perforated)
+    std::printf("  perforated at %.1f us, residual velocity %.1f m/s, energy absorbed %.2f J\n",
+                s.perforation_time_s * 1e6, s.residual_velocity_mps, s.energy_absorbed_J);
+  else
+    std::printf("  not perforated, energy absorbed %.2f J\n", s.energy_absorbed_J);
+  std::printf("  broken yarns: %d warp, %d weft; energy balance error %.2e\n", s.broken_warp_yarns, s.broken_weft_yarns,
+              s.energy_balance_error);
+  if (s.status == RunStatus::diverged || s.status == RunStatus::interrupted) std::printf("  %s\n", s.diagnosis.c_str());
+  for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
+  if (!out_dir.empty()) std::printf("  results in %s/ (summary.json, history.csv)\n", out_dir.c_str());
+}
+
+int cmd_run(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"frames"}, {"quiet", "vtk"});
+    if (a.out_dir.empty()) throw UsageError("run needs --out DIR");
+    Scene scene = load_scene_from(a);
+    prepare_output_dir(a.out_dir);
+    install_signal_handlers();
+    Simulation sim(scene);
+    const bool progress = scene.output.progress && !has_switch(a, "quiet") && isatty(fileno(stderr));
+    auto last = std::chrono::steady_clock::now();
+    sim.run(&g_interrupt, [&](const Simulation& s) {
+      if (!progress) return;
+      auto now = std::chrono::steady_clock::now();
+      if (now - last < std::chrono::milliseconds(200)) return;
+      last = now;
+      const auto& r = s.history().back();
+      std::fprintf(stderr, "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  balance %+.1e   ", r.t_s * 1e6,
+                   r.projectile_velocity_mps, r.broken_warp, r.broken_weft, r.balance_error);
+    });
+    if (progress) std::fprintf(stderr, "\r%*s\r", 80, "");
+    write_run_outputs(a.out_dir, sim);
+    const Summary s = sim.summary();
+    print_summary_line(s, a.out_dir);
+    if (s.status == RunStatus::diverged) return exit_diverged;
+    if (s.status == RunStatus::interrupted) return exit_interrupted;
+    return exit_ok;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+int cmd_keys(const Args&) {
+  for (const auto& k : scene_keys())
+    std::printf("%-32s %-8s %s\n", k.key.c_str(), k.unit.c_str(), k.description.c_str());
+  return 0;
+}
+
+}  // namespace ravel::app

@@ -1,0 +1,64 @@
+// Yarn element constitutive laws (SPEC §2, paper Eq 23-25).
+//
+// Zener: spring K1 in series with a Kelvin-Voigt unit (K2 || mu_d). With e_v the strain of
+// the Kelvin-Voigt unit: sigma = K1 (eps - e_v), mu_d de_v/dt = K1 eps - (K1 + K2) e_v.
+// Over a step the total strain is taken linear in time (eps0 -> eps1); the ODE for e_v is
+// then solved exactly, so the update is stable for any dt and reproduces Eq 24 at a
+// constant strain rate to rounding. The dashpot dissipation over the step is the exact
+// integral of mu_d (de_v/dt)^2 along that solution.
+//
+// Tension only: a yarn cannot carry compression (it buckles). When K1 (eps - e_v) would
+// be negative the element is slack: sigma = 0 and the Kelvin-Voigt unit relaxes on its
+// own, mu_d de_v/dt = -K2 e_v.
+#pragma once
+
+#include <cmath>
+
+namespace ravel {
+
+struct ZenerConstants {
+  double k1, k2, mu;   // Pa, Pa, Pa s
+  double tau() const { return mu / (k1 + k2); }
+};
+
+struct ZenerStep {
+  double ev;           // new internal strain
+  double stress;       // Pa, >= 0
+  double dissipated;   // J per m^3 over the step
+};
+
+// Advance one element from (eps0, ev0) to eps1 over dt.
+template <class R>
+inline ZenerStep zener_update(const ZenerConstants& c, R eps0, R eps1, R ev0, double dt, double decay,
+                              double slack_decay) {
+  // decay = exp(-dt/tau), slack_decay = exp(-dt K2/mu): precomputed, dt is fixed.
+  const double lam = 1.0 / c.tau();
+  const double g = c.k1 / (c.k1 + c.k2);
+  const double r = (double(eps1) - double(eps0)) / dt;
+  const double C = double(ev0) - g * (double(eps0) - r / lam);
+  const double ev1 = g * (double(eps1) - r / lam) + C * decay;
+  const double stress = c.k1 * (double(eps1) - ev1);
+  if (stress >= 0.0) {
+    // integral of (g r - lam C e^{-lam s})^2 ds over [0, dt]
+    const double diss = c.mu * (g * g * r * r * dt - 2.0 * g * r * C * (1.0 - decay) +
+                                0.5 * lam * C * C * (1.0 - decay * decay));
+    return {ev1, stress, diss};
+  }
+  // Slack: sigma = 0, Kelvin-Voigt unit relaxes: e_v = ev0 exp(-K2 s / mu).
+  const double evs = double(ev0) * slack_decay;
+  const double diss = 0.5 * c.k2 * (double(ev0) * double(ev0) - evs * evs);
+  return {evs, 0.0, diss};
+}
+
+// Stored energy per unit volume.
+inline double zener_stored(const ZenerConstants& c, double stress, double ev) {
+  return stress * stress / (2.0 * c.k1) + 0.5 * c.k2 * ev * ev;
+}
+
+// Eq 24: stress at strain eps under a constant strain rate from rest.
+inline double zener_constant_rate_stress(const ZenerConstants& c, double eps, double rate) {
+  const double s = c.k1 + c.k2;
+  return c.k1 * c.k2 / s * eps - c.k1 * c.k1 * c.mu / (s * s) * rate * (std::exp(-s / c.mu * eps / rate) - 1.0);
+}
+
+}  // namespace ravel

@@ -1,0 +1,299 @@
+// Weave builder: turns a Scene into the network of paper §2 (sliding: two nodes per
+// crossing, L1 apart, zig-zag yarns) or of reference [8] (pin-jointed: one node per
+// crossing), keeping only the part the scene's symmetry requires (SPEC §6).
+#include "model.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "geometry.h"
+
+namespace ravel {
+
+namespace {
+
+struct Grid {
+  int i_min, i_max, j_min, j_max;  // modelled global crossing indices (inclusive)
+  int hx, hy;                      // half counts: global I in [-hx, hx]
+};
+
+}  // namespace
+
+Model build_model(const Scene& scene) {
+  Model m;
+  const auto& f = scene.fabric;
+  const auto& y = scene.yarn;
+  const auto& p = scene.projectile;
+  const int k = f.yarns_per_element;
+  const double L0 = f.spacing_m * k;
+  const double L1 = f.crossing_gap_m;
+  const bool single = f.weave == Weave::single_yarn;
+  const bool sliding = !single && scene.solver.model == ContactModel::sliding;
+  m.contact = single ? ContactModel::pin_jointed : scene.solver.model;
+  m.lumping = k;
+  m.half_width = f.width_m / 2;
+  m.half_length = f.length_m / 2;
+  m.thickness = f.thickness_m;
+  m.clamped = single ? ClampedEdges{false, false, true, true} : f.clamped;
+
+  // ---- symmetry (SPEC §6): mirror planes the scene allows
+  const bool normal_strike = p.obliquity_deg == 0.0;
+  bool can_x = !single && p.offset_x_m == 0.0 && normal_strike && m.clamped.left == m.clamped.right &&
+               f.width_m == f.width_m;
+  bool can_y = p.offset_y_m == 0.0 && m.clamped.bottom == m.clamped.top;
+  std::string why_not;
+  if (!can_x) {
+    if (single) why_not += "a single yarn has no x extent to save; ";
+    else if (p.offset_x_m != 0.0) why_not += "off-centre in x; ";
+    else if (!normal_strike) why_not += "oblique strike breaks x symmetry; ";
+    else why_not += "left/right clamps differ; ";
+  }
+  if (!can_y) why_not += p.offset_y_m != 0.0 ? "off-centre in y; " : "bottom/top clamps differ; ";
+  if (scene.solver.symmetry == SymmetryMode::full) {
+    can_x = can_y = false;
+    why_not = "solver.symmetry = full forces the whole fabric";
+  }
+  m.mirror_x = can_x;
+  m.mirror_y = can_y;
+  m.symmetry_factor = (can_x ? 2.0 : 1.0) * (can_y ? 2.0 : 1.0);
+  m.symmetry_label = can_x && can_y ? "quarter" : (can_x || can_y) ? "half" : "full";
+  if (can_x && can_y)
+    m.symmetry_reason = "centred normal strike with symmetric clamps: a quarter reproduces the whole (SPEC 6)";
+  else if (can_x || can_y)
+    m.symmetry_reason = std::string("mirror plane ") + (can_x ? "x = 0" : "y = 0") + " only (" + why_not + ")";
+  else
+    m.symmetry_reason = why_not.empty() ? "no symmetry" : why_not;
+  while (!m.symmetry_reason.empty() && (m.symmetry_reason.back() == ' ' || m.symmetry_reason.back() == ';'))
+    m.symmetry_reason.pop_back();
+
+  Grid g;
+  g.hx = single ? 0 : int(std::floor(m.half_width / L0 + 1e-9));
+  g.hy = int(std::floor(m.half_length / L0 + 1e-9));
+  g.i_min = can_x ? 0 : -g.hx;
+  g.i_max = g.hx;
+  g.j_min = can_y ? 0 : -g.hy;
+  g.j_max = g.hy;
+  const int ni = g.i_max - g.i_min + 1, nj = g.j_max - g.j_min + 1;
+
+  // ---- material
+  m.material = y.material;
+  m.k1 = y.k1_pa;
+  m.k2 = y.k2_pa;
+  m.damping = y.damping_pa_s;
+  m.modulus_inst = y.material == Material::zener ? y.k1_pa : y.modulus_pa;
+  m.density = y.density_kg_m3;
+  m.failure_strain = y.failure_strain;
+  m.breakable = y.breakable;
+  m.friction = y.friction;
+  m.friction_penalty = scene.solver.friction_penalty;
+  m.contact_iterations = scene.solver.contact_iterations;
+
+  const double node_mass = f.node_mass_kg * double(k) * double(k);
+  const double area = y.area_m2 * k;
+  auto plane_factor = [&](int I, int J) {
+    return (can_x && I == 0 ? 0.5 : 1.0) * (can_y && J == 0 ? 0.5 : 1.0);
+  };
+  auto fixed_bits = [&](int I, int J) {
+    std::uint8_t b = 0;
+    if (can_x && I == 0) b |= fix_x;
+    if (can_y && J == 0) b |= fix_y;
+    const bool on_left = I == -g.hx, on_right = I == g.hx, on_bottom = J == -g.hy, on_top = J == g.hy;
+    if ((on_left && m.clamped.left) || (on_right && m.clamped.right) || (on_bottom && m.clamped.bottom) ||
+        (on_top && m.clamped.top))
+      b = fix_all;
+    return b;
+  };
+  auto add_node = [&](const Vec3d& x, double mass, std::uint8_t fix) {
+    m.x0.push_back(x);
+    m.mass.push_back(mass);
+    m.inv_mass.push_back(fix == fix_all ? 0.0 : 1.0 / mass);
+    m.fixed.push_back(fix);
+    return int(m.x0.size()) - 1;
+  };
+
+  // ---- nodes and yarns
+  m.yarn_offset.push_back(0);
+  if (single) {
+    // One straight warp yarn through the centre, clamped at both ends.
+    m.warp_count = 1;
+    for (int J = g.j_min; J <= g.j_max; ++J) {
+      std::uint8_t fix = (J == -g.hy || J == g.hy) ? fix_all : (can_y && J == 0 ? fix_y : 0);
+      int n = add_node(Vec3d(0, J * L0, 0), node_mass * (can_y && J == 0 ? 0.5 : 1.0), fix);
+      m.yarn_nodes.push_back(n);
+    }
+    m.yarn_offset.push_back(int(m.yarn_nodes.size()));
+    m.yarn_family.push_back(warp);
+    m.yarn_grid.push_back(0);
+  } else if (sliding) {
+    m.warp_count = ni;
+    m.weft_count = nj;
+    // Warp yarn I (along y): node at every J, z = +L1/2 where the warp is on top.
+    for (int I = g.i_min; I <= g.i_max; ++I) {
+      for (int J = g.j_min; J <= g.j_max; ++J) {
+        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;
+        int n = add_node(Vec3d(I * L0, J * L0, warp_top ? 0.5 * L1 : -0.5 * L1), node_mass * plane_factor(I, J),
+                         fixed_bits(I, J));
+        m.yarn_nodes.push_back(n);
+      }
+      m.yarn_offset.push_back(int(m.yarn_nodes.size()));
+      m.yarn_family.push_back(warp);
+      m.yarn_grid.push_back(I);
+    }
+    for (int J = g.j_min; J <= g.j_max; ++J) {
+      for (int I = g.i_min; I <= g.i_max; ++I) {
+        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;
+        int n = add_node(Vec3d(I * L0, J * L0, warp_top ? -0.5 * L1 : 0.5 * L1), node_mass * plane_factor(I, J),
+                         fixed_bits(I, J));
+        m.yarn_nodes.push_back(n);
+      }
+      m.yarn_offset.push_back(int(m.yarn_nodes.size()));
+      m.yarn_family.push_back(weft);
+      m.yarn_grid.push_back(J);
+    }
+  } else {
+    // Pin-jointed: one node per crossing carrying both yarns' mass.
+    m.warp_count = ni;
+    m.weft_count = nj;
+    std::vector<int> id(size_t(ni) * nj);
+    for (int I = g.i_min; I <= g.i_max; ++I)
+      for (int J = g.j_min; J <= g.j_max; ++J)
+        id[size_t(I - g.i_min) * nj + (J - g.j_min)] =
+            add_node(Vec3d(I * L0, J * L0, 0), 2 * node_mass * plane_factor(I, J), fixed_bits(I, J));
+    for (int I = g.i_min; I <= g.i_max; ++I) {
+      for (int J = g.j_min; J <= g.j_max; ++J) m.yarn_nodes.push_back(id[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+      m.yarn_offset.push_back(int(m.yarn_nodes.size()));
+      m.yarn_family.push_back(warp);
+      m.yarn_grid.push_back(I);
+    }
+    for (int J = g.j_min; J <= g.j_max; ++J) {
+      for (int I = g.i_min; I <= g.i_max; ++I) m.yarn_nodes.push_back(id[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+      m.yarn_offset.push_back(int(m.yarn_nodes.size()));
+      m.yarn_family.push_back(weft);
+      m.yarn_grid.push_back(J);
+    }
+  }
+  m.node_count = int(m.x0.size());
+
+  // ---- elements and bending springs
+  // Rest length: the crimped length sqrt(L0^2 + L1^2) of the zig-zag (paper Fig. 1). The
+  // pin-jointed and single-yarn models put their nodes at z = 0, so their elements start
+  // slack by the crimp and straighten before they carry load (crimp interchange, ref [8]).
+  const double crimped = single ? L0 : std::sqrt(L0 * L0 + L1 * L1);
+  m.yarn_end_free.resize(m.yarn_count());
+  for (int yy = 0; yy < m.yarn_count(); ++yy) {
+    m.yarn_elem_offset.push_back(int(m.elem_a.size()));
+    const bool is_warp = m.yarn_family[yy] == warp;
+    const int grid = m.yarn_grid[yy];
+    const bool on_plane = is_warp ? (can_x && grid == 0) : (can_y && grid == 0);
+    const double a = area * (on_plane ? 0.5 : 1.0);
+    const int n = m.yarn_size(yy);
+    for (int kk = 0; kk + 1 < n; ++kk) {
+      m.elem_a.push_back(m.yarn_node(yy, kk));
+      m.elem_b.push_back(m.yarn_node(yy, kk + 1));
+      m.elem_yarn.push_back(yy);
+      m.elem_rest.push_back(crimped);
+      m.elem_area.push_back(a);
+      m.elem_stiffness.push_back(m.modulus_inst * a / crimped);
+    }
+    const int e0 = m.yarn_elem_offset.back();
+    for (int kk = 0; kk + 2 < n; ++kk) {
+      m.bend_e1.push_back(e0 + kk);
+      m.bend_e2.push_back(e0 + kk + 1);
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / crimped);
+      // Midpoint distance at rest: along the yarn the zig-zag midpoints sit L0 apart.
+      const Vec3d m1 = 0.5 * (m.x0[m.yarn_node(yy, kk)] + m.x0[m.yarn_node(yy, kk + 1)]);
+      const Vec3d m2 = 0.5 * (m.x0[m.yarn_node(yy, kk + 1)] + m.x0[m.yarn_node(yy, kk + 2)]);
+      m.bend_rest.push_back((m2 - m1).norm());
+    }
+    // Free ends: the first node is free unless clamped or on a symmetry plane.
+    const int first = m.yarn_node(yy, 0), last = m.yarn_node(yy, n - 1);
+    std::uint8_t ef = 0;
+    if (m.fixed[first] != fix_all && !(m.fixed[first] & (is_warp ? fix_y : fix_x))) ef |= 1;
+    if (m.fixed[last] != fix_all) ef |= 2;
+    m.yarn_end_free[yy] = ef;
+  }
+  m.yarn_elem_offset.push_back(int(m.elem_a.size()));
+  m.element_count = int(m.elem_a.size());
+
+  // ---- crossings (sliding)
+  const double D = 0.5 * f.thickness_m;
+  if (sliding) {
+    for (int wi = 0; wi < m.warp_count; ++wi) {
+      for (int fj = 0; fj < m.weft_count; ++fj) {
+        Crossing c;
+        c.warp_yarn = wi;
+        c.weft_yarn = m.warp_count + fj;
+        c.grid_i = g.i_min + wi;
+        c.grid_j = g.j_min + fj;
+        c.warp_node = fj;  // warp yarn wi has a node at every J
+        c.weft_node = wi;
+        const bool warp_top = ((c.grid_i + c.grid_j) % 2 + 2) % 2 == 0;
+        // t_warp x t_weft ~ y x x = -z; n must point from warp to weft: -z when the warp is on top.
+        c.side = warp_top ? 1.0 : -1.0;
+        // Rest distance between the two yarns' adjoining segments: the zig-zag brings them a
+        // little closer than L1 next to the node, so D is capped by it (no spring-back at t=0).
+        double best = 1e300;
+        for (int sa = c.warp_node - 1; sa <= c.warp_node; ++sa) {
+          if (sa < 0 || sa + 1 >= m.yarn_size(c.warp_yarn)) continue;
+          for (int sb = c.weft_node - 1; sb <= c.weft_node; ++sb) {
+            if (sb < 0 || sb + 1 >= m.yarn_size(c.weft_yarn)) continue;
+            double s, t;
+            Vec3d pa, pb;
+            closest_points_segments(m.x0[m.yarn_node(c.warp_yarn, sa)], m.x0[m.yarn_node(c.warp_yarn, sa + 1)],
+                                    m.x0[m.yarn_node(c.weft_yarn, sb)], m.x0[m.yarn_node(c.weft_yarn, sb + 1)], s, t,
+                                    pa, pb);
+            best = std::min(best, (pb - pa).norm());
+          }
+        }
+        c.contact_distance = std::min(D, best);
+        m.crossings.push_back(c);
+      }
+    }
+  }
+
+  // ---- time step (Eq 4)
+  m.wave_speed = std::sqrt(m.modulus_inst / m.density);
+  m.shortest_element = 1e300;
+  for (double r : m.elem_rest) m.shortest_element = std::min(m.shortest_element, r);
+  m.dt = scene.solver.dt_factor * m.shortest_element / m.wave_speed;
+  // Central differences on a chain of lumped masses m joined by springs k are stable for
+  // dt < 2/omega_max = sqrt(m_node/k) (each node feels two springs plus 5 % bending);
+  // expressed as alpha = dt c / L this is sqrt(m_node / (rho A L)) / sqrt(1 + bending).
+  {
+    const double m_line = f.node_mass_kg * k * k * (sliding || single ? 1.0 : 2.0);
+    const double k_axial = m.modulus_inst * area / crimped;
+    const double bend = y.bending_fraction;
+    // Pin-jointed nodes carry two yarns' mass, but each direction only one yarn's stiffness.
+    m.critical_dt_factor = std::sqrt(m_line / k_axial) / std::sqrt(1.0 + bend) * m.wave_speed / m.shortest_element;
+  }
+  m.end_time = scene.solver.end_time_s;
+
+  // ---- projectile
+  m.shape.kind = p.shape;
+  m.shape.radius = 0.5 * p.diameter_m;
+  m.shape.length = p.length_m;
+  const double th = p.obliquity_deg * M_PI / 180.0;
+  m.flight_dir = Vec3d(std::sin(th), 0, -std::cos(th));
+  m.shape.axis = m.flight_dir;
+  m.projectile_mass_full = p.mass_kg;
+  m.projectile_mass = p.mass_kg / m.symmetry_factor;
+  m.impact_velocity = p.velocity_mps;
+  m.projectile_friction = p.friction;
+  double z_top = -1e300;
+  for (const auto& x : m.x0) z_top = std::max(z_top, x.z());
+  // Place the projectile just touching the fabric top: find the centre offset along
+  // -flight_dir at which the sdf of the strike point equals zero.
+  const Vec3d strike(p.offset_x_m, p.offset_y_m, z_top);
+  double lo = 0, hi = 4 * m.shape.bounding_radius() + 1e-3;
+  for (int it = 0; it < 200; ++it) {
+    double mid = 0.5 * (lo + hi);
+    Vec3d c = strike - mid * m.flight_dir;
+    Vec3d nrm;
+    if (m.shape.sdf(Vec3d(strike - c), nrm) < 0) lo = mid;
+    else hi = mid;
+  }
+  m.projectile_x0 = strike - hi * m.flight_dir;
+  return m;
+}
+
+}  // namespace ravel

@@ -1,0 +1,32 @@
+// Writing results: history.csv, summary.json, and the atomic-file helper every output
+// of ravel goes through (write to a temporary name in the same folder, then rename, so
+// a reader never sees half a file and an interrupted run never leaves one).
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "simulation.h"
+
+namespace ravel {
+
+class OutputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Create `dir` (and parents) if needed and check that it is a writable folder.
+void prepare_output_dir(const std::string& dir);
+// Write `content` to `path` atomically. Throws OutputError naming the path.
+void write_file_atomic(const std::string& path, const std::string& content);
+
+// The column names of history.csv, in order (t_s first).
+std::vector<std::string> history_columns();
+std::string history_csv(const std::vector<HistoryRow>& rows);
+std::string summary_json(const Summary& s, const Scene& scene);
+
+// Write DIR/history.csv, DIR/summary.json and DIR/scene.toml (the scene as run).
+void write_run_outputs(const std::string& dir, const Simulation& sim);
+
+}  // namespace ravel

@@ -1,0 +1,519 @@
+// Scene reading: one table of keys (name, unit, type, range, where it lives in Scene)
+// drives parsing, `--set` overrides, validation messages, to_toml() and `ravel keys`.
+#include "scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <toml++/toml.h>
+
+#ifndef RAVEL_ASSETS_DIR
+#define RAVEL_ASSETS_DIR "assets"
+#endif
+
+namespace ravel {
+
+SceneError::SceneError(std::string key, std::string where, std::string problem)
+    : std::runtime_error((where.empty() ? std::string() : where + ": ") +
+                         (key.empty() ? std::string() : key + ": ") + problem),
+      key_(std::move(key)),
+      where_(std::move(where)),
+      problem_(std::move(problem)) {}
+
+std::string ClampedEdges::to_string() const {
+  if (left && right && bottom && top) return "all";
+  if (!any()) return "none";
+  std::string s;
+  auto add = [&](bool on, const char* name) {
+    if (!on) return;
+    if (!s.empty()) s += ",";
+    s += name;
+  };
+  add(left, "left");
+  add(right, "right");
+  add(bottom, "bottom");
+  add(top, "top");
+  return s;
+}
+
+const char* to_string(ContactModel m) { return m == ContactModel::sliding ? "sliding" : "pin_jointed"; }
+const char* to_string(Material m) { return m == Material::zener ? "zener" : "elastic"; }
+const char* to_string(Weave w) { return w == Weave::plain ? "plain" : "single_yarn"; }
+const char* to_string(ShapeKind s) {
+  switch (s) {
+    case ShapeKind::sphere: return "sphere";
+    case ShapeKind::cylinder: return "cylinder";
+    case ShapeKind::cone: return "cone";
+  }
+  return "?";
+}
+
+namespace {
+
+enum class Type { number, integer, boolean, text };
+
+// One scene key. `scale` converts the file's unit to SI (mm -> m is 1e-3).
+struct KeyDef {
+  std::string key, unit, description;
+  Type type;
+  double scale = 1.0;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool min_exclusive = false;
+  std::vector<std::string> choices;                       // for text enums
+  std::function<void(Scene&, double)> set_number;        // SI value
+  std::function<double(const Scene&)> get_number;        // SI value
+  std::function<void(Scene&, const std::string&)> set_text;
+  std::function<std::string(const Scene&)> get_text;
+};
+
+#define NUM(KEY, UNIT, DESC, SCALE, MIN, MINEX, MAX, FIELD)                                   \
+  {                                                                                           \
+    KeyDef d{KEY, UNIT, DESC, Type::number, SCALE, MIN, MAX, MINEX, {}, {}, {}, {}, {}};      \
+    d.set_number = [](Scene& s, double v) { s.FIELD = v; };                                   \
+    d.get_number = [](const Scene& s) { return double(s.FIELD); };                            \
+    defs.push_back(std::move(d));                                                             \
+  }
+#define INT(KEY, UNIT, DESC, MIN, MAX, FIELD)                                                 \
+  {                                                                                           \
+    KeyDef d{KEY, UNIT, DESC, Type::integer, 1.0, MIN, MAX, false, {}, {}, {}, {}, {}};       \
+    d.set_number = [](Scene& s, double v) { s.FIELD = int(v); };                              \
+    d.get_number = [](const Scene& s) { return double(s.FIELD); };                            \
+    defs.push_back(std::move(d));                                                             \
+  }
+#define BOOL(KEY, DESC, FIELD)                                                                \
+  {                                                                                           \
+    KeyDef d{KEY, "", DESC, Type::boolean, 1.0, 0, 1, false, {}, {}, {}, {}, {}};             \
+    d.set_number = [](Scene& s, double v) { s.FIELD = v != 0; };                              \
+    d.get_number = [](const Scene& s) { return s.FIELD ? 1.0 : 0.0; };                       \
+    defs.push_back(std::move(d));                                                             \
+  }
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+std::vector<KeyDef> make_defs() {
+  std::vector<KeyDef> defs;
+  {
+    KeyDef d{"name", "", "scene name, shown in captions and summaries", Type::text};
+    d.set_text = [](Scene& s, const std::string& v) { s.name = v; };
+    d.get_text = [](const Scene& s) { return s.name; };
+    defs.push_back(d);
+  }
+  {
+    KeyDef d{"fabric.weave", "", "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)", Type::text};
+    d.choices = {"plain", "single_yarn"};
+    d.set_text = [](Scene& s, const std::string& v) { s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn; };
+    d.get_text = [](const Scene& s) { return std::string(to_string(s.fabric.weave)); };
+    defs.push_back(d);
+  }
+  NUM("fabric.width_mm", "mm", "fabric size along x (weft direction)", 1e-3, 0, true, inf, fabric.width_m);
+  NUM("fabric.length_mm", "mm", "fabric size along y (warp direction)", 1e-3, 0, true, inf, fabric.length_m);
+  NUM("fabric.spacing_mm", "mm", "L0: horizontal distance between neighbouring nodes of a yarn", 1e-3, 0, true, inf, fabric.spacing_m);
+  NUM("fabric.crossing_gap_mm", "mm", "L1: vertical distance between the two nodes at a crossing", 1e-3, 0, false, inf, fabric.crossing_gap_m);
+  NUM("fabric.node_mass_g", "g", "lumped mass m of one yarn node", 1e-3, 0, true, inf, fabric.node_mass_kg);
+  NUM("fabric.thickness_mm", "mm", "fabric thickness; the yarn contact diameter D is half of it", 1e-3, 0, true, inf, fabric.thickness_m);
+  {
+    KeyDef d{"fabric.clamped", "", "clamped edges: comma list of left,right (x = -W/2, +W/2), bottom,top (y = -L/2, +L/2), or all / none", Type::text};
+    d.set_text = [](Scene& s, const std::string& v) {
+      ClampedEdges c{false, false, false, false};
+      std::stringstream ss(v);
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        item.erase(std::remove_if(item.begin(), item.end(), ::isspace), item.end());
+        if (item == "left") c.left = true;
+        else if (item == "right") c.right = true;
+        else if (item == "bottom") c.bottom = true;
+        else if (item == "top") c.top = true;
+        else if (item == "all") c = {true, true, true, true};
+        else if (item == "none" || item.empty()) {}
+        else throw std::invalid_argument("unknown edge '" + item + "' (use left, right, bottom, top, all or none)");
+      }
+      s.fabric.clamped = c;
+    };
+    d.get_text = [](const Scene& s) { return s.fabric.clamped.to_string(); };
+    defs.push_back(d);
+  }
+  INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)", 1, 16, fabric.yarns_per_element);
+  {
+    KeyDef d{"yarn.material", "", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", Type::text};
+    d.choices = {"zener", "elastic"};
+    d.set_text = [](Scene& s, const std::string& v) { s.yarn.material = v == "zener" ? Material::zener : Material::elastic; };
+    d.get_text = [](const Scene& s) { return std::string(to_string(s.yarn.material)); };
+    defs.push_back(d);
+  }
+  NUM("yarn.modulus_pa", "Pa", "Young's modulus E of the elastic material", 1, 0, true, inf, yarn.modulus_pa);
+  NUM("yarn.k1_pa", "Pa", "Zener K1: spring in series (instantaneous modulus)", 1, 0, true, inf, yarn.k1_pa);
+  NUM("yarn.k2_pa", "Pa", "Zener K2: spring of the Kelvin-Voigt unit", 1, 0, true, inf, yarn.k2_pa);
+  NUM("yarn.damping_pa_s", "Pa s", "Zener dashpot mu_d", 1, 0, true, inf, yarn.damping_pa_s);
+  NUM("yarn.density_kg_m3", "kg/m^3", "yarn density rho (wave speed sqrt(E/rho))", 1, 0, true, inf, yarn.density_kg_m3);
+  NUM("yarn.area_m2", "m^2", "yarn cross-section A", 1, 0, true, inf, yarn.area_m2);
+  NUM("yarn.failure_strain", "", "element strain at which a yarn element breaks", 1, 0, true, 1.0, yarn.failure_strain);
+  BOOL("yarn.breakable", "false: elements never break (energy checks)", yarn.breakable);
+  NUM("yarn.friction", "", "yarn-yarn Coulomb friction coefficient mu", 1, 0, false, 10.0, yarn.friction);
+  NUM("yarn.bending_fraction", "", "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0, yarn.bending_fraction);
+  {
+    KeyDef d{"projectile.shape", "", "sphere, cylinder (flat-faced) or cone", Type::text};
+    d.choices = {"sphere", "cylinder", "cone"};
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.projectile.shape = v == "sphere" ? ShapeKind::sphere : v == "cylinder" ? ShapeKind::cylinder : ShapeKind::cone;
+    };
+    d.get_text = [](const Scene& s) { return std::string(to_string(s.projectile.shape)); };
+    defs.push_back(d);
+  }
+  NUM("projectile.diameter_mm", "mm", "projectile diameter", 1e-3, 0, true, inf, projectile.diameter_m);
+  NUM("projectile.length_mm", "mm", "cylinder length / cone height", 1e-3, 0, true, inf, projectile.length_m);
+  NUM("projectile.mass_g", "g", "projectile mass M", 1e-3, 0, true, inf, projectile.mass_kg);
+  NUM("projectile.velocity_mps", "m/s", "impact velocity V0", 1, 0, true, inf, projectile.velocity_mps);
+  NUM("projectile.friction", "", "projectile-yarn friction coefficient mu_p", 1, 0, false, 10.0, projectile.friction);
+  NUM("projectile.offset_x_mm", "mm", "strike point x offset from the fabric centre", 1e-3, -inf, false, inf, projectile.offset_x_m);
+  NUM("projectile.offset_y_mm", "mm", "strike point y offset from the fabric centre", 1e-3, -inf, false, inf, projectile.offset_y_m);
+  NUM("projectile.obliquity_deg", "deg", "angle of the flight path from the fabric normal (in the x-z plane)", 1, 0, false, 80, projectile.obliquity_deg);
+  {
+    KeyDef d{"solver.model", "", "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)", Type::text};
+    d.choices = {"sliding", "pin_jointed"};
+    d.set_text = [](Scene& s, const std::string& v) { s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed; };
+    d.get_text = [](const Scene& s) { return std::string(to_string(s.solver.model)); };
+    defs.push_back(d);
+  }
+  NUM("solver.dt_factor", "", "alpha of Eq 4: dt = alpha L / c", 1, 0, true, 10.0, solver.dt_factor);
+  INT("solver.contact_iterations", "", "N: yarn contact correction passes per step (Eq 16-17)", 1, 64, solver.contact_iterations);
+  NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0, solver.friction_penalty);
+  {
+    KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text};
+    d.choices = {"auto", "full"};
+    d.set_text = [](Scene& s, const std::string& v) { s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full; };
+    d.get_text = [](const Scene& s) { return std::string(s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full"); };
+    defs.push_back(d);
+  }
+  {
+    KeyDef d{"solver.precision", "", "double or float: floating-point precision of the state", Type::text};
+    d.choices = {"double", "float"};
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.solver.precision = v == "double" ? Precision::double_precision : Precision::single_precision;
+    };
+    d.get_text = [](const Scene& s) {
+      return std::string(s.solver.precision == Precision::double_precision ? "double" : "float");
+    };
+    defs.push_back(d);
+  }
+  NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true, 1e5, solver.end_time_s);
+  INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
+  NUM("solver.divergence_energy_factor", "", "a run whose ledger total exceeds this x the initial energy is declared diverged", 1, 1.0, true, 1e6, solver.divergence_energy_factor);
+  NUM("output.history_interval_us", "us", "time between rows of history.csv", 1e-6, 0, true, 1e6, output.history_interval_s);
+  BOOL("output.progress", "print a progress line on a terminal", output.progress);
+  return defs;
+}
+#undef NUM
+#undef INT
+#undef BOOL
+
+const std::vector<KeyDef>& defs() {
+  static const std::vector<KeyDef> d = make_defs();
+  return d;
+}
+
+const KeyDef* find_def(const std::string& key) {
+  for (const auto& d : defs())
+    if (d.key == key) return &d;
+  return nullptr;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string did_you_mean(const std::string& key) {
+  const KeyDef* best = nullptr;
+  size_t best_d = 1000;
+  for (const auto& d : defs()) {
+    size_t e = edit_distance(key, d.key);
+    // Also match the last component alone (`friction` under the wrong section).
+    auto dot = d.key.rfind('.');
+    auto kdot = key.rfind('.');
+    if (dot != std::string::npos && kdot != std::string::npos &&
+        d.key.substr(dot) == key.substr(kdot))
+      e = std::min<size_t>(e, 2);
+    if (e < best_d) best_d = e, best = &d;
+  }
+  if (best && best_d <= std::max<size_t>(3, key.size() / 3)) return " (did you mean '" + best->key + "'?)";
+  return "";
+}
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o.precision(12);
+  o << v;
+  return o.str();
+}
+
+// Apply one value to the scene, with the key's checks. `raw` is the value as the user
+// wrote it (for messages).
+void apply_number(Scene& s, const KeyDef& d, double v, const std::string& where) {
+  if (std::isnan(v)) throw SceneError(d.key, where, "is NaN; give a number" + (d.unit.empty() ? "" : " in " + d.unit));
+  if (std::isinf(v)) throw SceneError(d.key, where, "is infinite; give a finite number");
+  if (d.type == Type::integer && v != std::floor(v))
+    throw SceneError(d.key, where, "must be a whole number, got " + fmt(v));
+  bool below = d.min_exclusive ? v <= d.min : v < d.min;
+  if (below || v > d.max) {
+    std::string range;
+    if (d.min_exclusive && d.min == 0 && d.max == inf) range = "must be positive";
+    else if (d.min == 0 && d.max == inf) range = "must not be negative";
+    else {
+      range = "must be ";
+      range += d.min_exclusive ? "> " : ">= ";
+      range += fmt(d.min) + (d.max < inf ? " and <= " + fmt(d.max) : std::string());
+    }
+    throw SceneError(d.key, where, range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit));
+  }
+  d.set_number(s, v * d.scale);
+}
+
+void apply_text(Scene& s, const KeyDef& d, const std::string& v, const std::string& where) {
+  if (!d.choices.empty() && std::find(d.choices.begin(), d.choices.end(), v) == d.choices.end()) {
+    std::string list;
+    for (const auto& c : d.choices) list += (list.empty() ? "" : ", ") + c;
+    throw SceneError(d.key, where, "unknown value '" + v + "' (choose one of: " + list + ")");
+  }
+  try {
+    d.set_text(s, v);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(d.key, where, e.what());
+  }
+}
+
+const char* type_name(Type t) {
+  switch (t) {
+    case Type::number: return "a number";
+    case Type::integer: return "a whole number";
+    case Type::boolean: return "true or false";
+    case Type::text: return "a string";
+  }
+  return "?";
+}
+
+void apply_node(Scene& s, const std::string& key, const toml::node& node, const std::string& file) {
+  std::string where = file + ":" + std::to_string(node.source().begin.line);
+  const KeyDef* d = find_def(key);
+  if (!d) throw SceneError(key, where, "unknown key" + did_you_mean(key));
+  switch (d->type) {
+    case Type::number:
+    case Type::integer:
+      if (auto v = node.value<double>(); v && (node.is_number())) {
+        apply_number(s, *d, *v, where);
+        return;
+      }
+      break;
+    case Type::boolean:
+      if (auto v = node.value<bool>(); v && node.is_boolean()) {
+        d->set_number(s, *v ? 1 : 0);
+        return;
+      }
+      break;
+    case Type::text:
+      if (auto v = node.value<std::string>(); v && node.is_string()) {
+        apply_text(s, *d, *v, where);
+        return;
+      }
+      break;
+  }
+  throw SceneError(key, where, std::string("wrong type: expected ") + type_name(d->type));
+}
+
+void walk(Scene& s, const toml::table& table, const std::string& prefix, const std::string& file) {
+  for (const auto& [k, node] : table) {
+    std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (const auto* sub = node.as_table()) {
+      bool is_section = false;
+      for (const auto& d : defs())
+        if (d.key.rfind(key + ".", 0) == 0) is_section = true;
+      if (!is_section) {
+        std::string where = file + ":" + std::to_string(node.source().begin.line);
+        throw SceneError(key, where, "unknown section (sections are fabric, yarn, projectile, solver, output)");
+      }
+      walk(s, *sub, key, file);
+    } else {
+      apply_node(s, key, node, file);
+    }
+  }
+}
+
+void apply_override(Scene& s, const std::string& kv) {
+  const std::string where = "--set " + kv;
+  auto eq = kv.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw SceneError("", "--set", "'" + kv + "' is not of the form section.key=value");
+  std::string key = kv.substr(0, eq), val = kv.substr(eq + 1);
+  auto trim = [](std::string& t) {
+    while (!t.empty() && isspace((unsigned char)t.back())) t.pop_back();
+    while (!t.empty() && isspace((unsigned char)t.front())) t.erase(t.begin());
+  };
+  trim(key);
+  trim(val);
+  const KeyDef* d = find_def(key);
+  if (!d) throw SceneError(key, "--set", "unknown key" + did_you_mean(key));
+  switch (d->type) {
+    case Type::number:
+    case Type::integer: {
+      std::string low = val;
+      std::transform(low.begin(), low.end(), low.begin(), ::tolower);
+      double v;
+      if (low == "nan") v = std::numeric_limits<double>::quiet_NaN();
+      else if (low == "inf" || low == "+inf") v = inf;
+      else if (low == "-inf") v = -inf;
+      else {
+        char* end = nullptr;
+        v = std::strtod(val.c_str(), &end);
+        if (val.empty() || end != val.c_str() + val.size())
+          throw SceneError(key, "--set", "wrong type: expected " + std::string(type_name(d->type)) + ", got '" + val + "'");
+      }
+      apply_number(s, *d, v, "--set");
+      return;
+    }
+    case Type::boolean:
+      if (val == "true" || val == "1") d->set_number(s, 1);
+      else if (val == "false" || val == "0") d->set_number(s, 0);
+      else throw SceneError(key, "--set", "wrong type: expected true or false, got '" + val + "'");
+      return;
+    case Type::text:
+      if (val.size() >= 2 && (val.front() == '"' || val.front() == '\'') && val.back() == val.front())
+        val = val.substr(1, val.size() - 2);
+      apply_text(s, *d, val, "--set");
+      return;
+  }
+}
+
+}  // namespace
+
+const std::vector<SceneKeyInfo>& scene_keys() {
+  static const std::vector<SceneKeyInfo> info = [] {
+    std::vector<SceneKeyInfo> v;
+    for (const auto& d : defs()) v.push_back({d.key, d.unit, d.description});
+    return v;
+  }();
+  return info;
+}
+
+Scene parse_scene(const std::string& toml_text, const std::string& source_name,
+                  const std::vector<std::string>& overrides) {
+  Scene s;
+  s.source = source_name;
+  toml::table table;
+  try {
+    table = toml::parse(toml_text, source_name);
+  } catch (const toml::parse_error& e) {
+    std::string where = source_name + ":" + std::to_string(e.source().begin.line);
+    throw SceneError("", where, std::string("TOML syntax error: ") + std::string(e.description()));
+  }
+  walk(s, table, "", source_name.empty() ? "scene" : source_name);
+  for (const auto& kv : overrides) apply_override(s, kv);
+  validate_scene(s);
+  return s;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  if (path.empty()) return parse_scene("", "", overrides);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError("", path, "cannot open scene file (does it exist and is it readable?)");
+  std::stringstream buf;
+  buf << in.rdbuf();
+  return parse_scene(buf.str(), path, overrides);
+}
+
+void validate_scene(Scene& s) {
+  s.warnings.clear();
+  const std::string w = s.source.empty() ? "scene" : s.source;
+  // Non-negative / positive / NaN checks of every value (overrides applied to defaults,
+  // values that came from code rather than text).
+  for (const auto& d : defs()) {
+    if (!d.get_number) continue;
+    double v = d.get_number(s) / d.scale;
+    if (d.type == Type::boolean) continue;
+    apply_number(s, d, v, w);  // re-applies the same value: validates it
+  }
+  const auto& f = s.fabric;
+  const double L0 = f.spacing_m * f.yarns_per_element;
+  if (f.weave == Weave::plain) {
+    if (f.width_m < 2 * L0 || f.length_m < 2 * L0)
+      throw SceneError("fabric.width_mm", w, "the fabric must span at least two yarn spacings (fabric.spacing_mm x fabric.yarns_per_element) each way");
+    if (f.width_m / L0 > 4000 || f.length_m / L0 > 4000)
+      throw SceneError("fabric.spacing_mm", w, "more than 4000 yarns per direction; this would not fit in memory");
+  } else if (f.length_m < 2 * L0) {
+    throw SceneError("fabric.length_mm", w, "the yarn must span at least two node spacings");
+  }
+  if (f.crossing_gap_m > L0)
+    throw SceneError("fabric.crossing_gap_mm", w, "L1 larger than the node spacing L0 is not a woven fabric");
+  const auto& p = s.projectile;
+  const double half_w = f.weave == Weave::plain ? f.width_m / 2 : f.length_m / 2;
+  if (std::abs(p.offset_x_m) + p.diameter_m / 2 >= (f.weave == Weave::plain ? f.width_m / 2 : half_w) ||
+      std::abs(p.offset_y_m) + p.diameter_m / 2 >= f.length_m / 2)
+    throw SceneError("projectile.diameter_mm", w, "the projectile does not fit inside the fabric at the strike point (check diameter and offsets)");
+  if (s.solver.dt_factor > 1.0)
+    s.warnings.push_back("solver.dt_factor = " + fmt(s.solver.dt_factor) +
+                         " is above 1: beyond the explicit stability limit of Eq 4; the run will likely diverge");
+  if (s.yarn.material == Material::zener && s.yarn.failure_strain > 0.2)
+    s.warnings.push_back("yarn.failure_strain = " + fmt(s.yarn.failure_strain) +
+                         " is beyond the small-strain range the Zener fit (Gu's data, up to 5.7 %) covers");
+  // Node mass against density x area x element length (the paper's m = rho A L).
+  const double elem_len = std::sqrt(f.spacing_m * f.spacing_m + f.crossing_gap_m * f.crossing_gap_m);
+  const double m_expected = s.yarn.density_kg_m3 * s.yarn.area_m2 * elem_len;
+  const double ratio = f.node_mass_kg / m_expected;
+  if (ratio > 3 || ratio < 1.0 / 3)
+    throw SceneError("fabric.node_mass_g", w,
+                     "node mass " + fmt(f.node_mass_kg * 1e3) + " g is inconsistent with density x area x element length = " +
+                         fmt(m_expected * 1e3) + " g (more than 3x apart)");
+  if (ratio > 1.25 || ratio < 0.8)
+    s.warnings.push_back("fabric.node_mass_g differs from density x area x element length by " +
+                         fmt(std::round((ratio - 1) * 100)) + " %");
+  if (f.weave == Weave::plain && s.projectile.diameter_m > 0.9 * std::min(f.width_m, f.length_m))
+    s.warnings.push_back("the projectile is nearly as large as the fabric");
+}
+
+std::string scene_to_toml(const Scene& s) {
+  std::ostringstream o;
+  o << "# ravel scene\n";
+  std::string section;
+  for (const auto& d : defs()) {
+    auto dot = d.key.find('.');
+    std::string sec = dot == std::string::npos ? "" : d.key.substr(0, dot);
+    std::string name = dot == std::string::npos ? d.key : d.key.substr(dot + 1);
+    if (sec != section) {
+      o << "\n[" << sec << "]\n";
+      section = sec;
+    }
+    o << name << " = ";
+    if (d.type == Type::text) {
+      o << '"' << d.get_text(s) << '"';
+    } else if (d.type == Type::boolean) {
+      o << (d.get_number(s) != 0 ? "true" : "false");
+    } else if (d.type == Type::integer) {
+      o << static_cast<long long>(d.get_number(s));
+    } else {
+      std::string v = fmt(d.get_number(s) / d.scale);
+      if (v.find_first_of(".eE") == std::string::npos && v.find("inf") == std::string::npos) v += ".0";
+      o << v;
+    }
+    o << "    # " << (d.unit.empty() ? "" : "[" + d.unit + "] ") << d.description << "\n";
+  }
+  return o.str();
+}
+
+std::string assets_dir() {
+  if (const char* env = std::getenv("RAVEL_ASSETS")) return env;
+  return RAVEL_ASSETS_DIR;
+}
+
+std::string default_scene_path() { return assets_dir() + "/scenes/twaron_ct716.toml"; }
+
+}  // namespace ravel

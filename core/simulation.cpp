@@ -1,0 +1,378 @@
+// Simulation driver: model choice, stepping, history sampling, end-of-run tests.
+#include "simulation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "model.h"
+#include "solver.h"
+
+namespace ravel {
+
+const char* to_string(RunStatus s) {
+  switch (s) {
+    case RunStatus::running: return "running";
+    case RunStatus::completed: return "completed";
+    case RunStatus::diverged: return "diverged";
+    case RunStatus::interrupted: return "interrupted";
+  }
+  return "?";
+}
+
+const char* to_string(EndReason r) {
+  switch (r) {
+    case EndReason::none: return "none";
+    case EndReason::perforated: return "perforated";
+    case EndReason::rebounded: return "rebounded";
+    case EndReason::end_time: return "end_time";
+    case EndReason::diverged: return "diverged";
+    case EndReason::interrupted: return "interrupted";
+  }
+  return "?";
+}
+
+namespace {
+// A perforation is confirmed when the projectile has been free of every node for this long
+// while still moving forward, and no node lies ahead of it within its silhouette.
+constexpr double kPerforationConfirm_s = 3e-6;
+
+std::string fmt(const char* f, double v) {
+  char b[96];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+}  // namespace
+
+struct Simulation::Impl {
+  Scene scene;
+  std::unique_ptr<Solver> solver;
+  std::vector<HistoryRow> history;
+  RunStatus status = RunStatus::running;
+  EndReason reason = EndReason::none;
+  std::string diagnosis;
+  long sample_every = 1;
+  double worst_balance = 0;
+  double perforation_time = -1;
+  double wall_s = 0;
+  std::vector<std::string> warnings;
+
+  const Model& model() const { return solver->model(); }
+
+  double forward_velocity() const { return solver->projectile_velocity().dot(model().flight_dir); }
+
+  HistoryRow sample() const {
+    const Model& m = model();
+    const double f = m.symmetry_factor;
+    HistoryRow r;
+    r.t_s = std::max(0.0, solver->ledger_time());
+    r.projectile_z_m = solver->projectile_position().z();
+    r.projectile_velocity_mps = forward_velocity();
+    r.ledger = solver->ledger().scaled(f);
+    const double e0 = m.initial_energy();
+    r.balance_error = e0 > 0 ? (r.ledger.total() - e0) / e0 : 0;
+    r.broken_warp = int(std::lround(solver->broken_count(warp) * broken_weight(warp)));
+    r.broken_weft = int(std::lround(solver->broken_count(weft) * broken_weight(weft)));
+    r.max_strain = solver->max_strain();
+    r.projectile_contact_force_N = solver->projectile_contact_force() * f;
+    r.yarn_contact_force_N = solver->yarn_contact_force() * f;
+    r.nodes_on_projectile = solver->nodes_on_projectile();
+    r.sliding_crossings = int(std::lround(solver->sliding_crossings() * f));
+    r.stuck_crossings = int(std::lround(solver->stuck_crossings() * f));
+    return r;
+  }
+
+  // Broken elements are counted for the whole fabric: each modelled element stands for
+  // symmetry_factor elements (those on a symmetry plane for half as many).
+  double broken_weight(int) const { return model().symmetry_factor; }
+
+  bool perforation_confirmed() {
+    if (!solver->had_contact() || solver->nodes_on_projectile() > 0) return false;
+    if (forward_velocity() <= 0) return false;
+    if (solver->time() - solver->last_contact_time() < kPerforationConfirm_s) return false;
+    const Model& m = model();
+    const Vec3d xp = solver->projectile_position();
+    const double R = m.shape.radius;
+    // The fabric still holds the projectile if a node that is attached to the clamps (through
+    // unbroken elements and yarn-yarn contacts) lies ahead of it inside its silhouette and
+    // moves forward slower than it. Loose debris (broken-off yarn pieces) does not count.
+    const std::vector<char> attached = attached_nodes();
+    const double vf = forward_velocity();
+    for (int i = 0; i < m.node_count; ++i) {
+      if (!attached[i]) continue;
+      const Vec3d rel = solver->position(i) - xp;
+      const double ahead = rel.dot(m.flight_dir);
+      if (ahead <= 0) continue;
+      if ((rel - ahead * m.flight_dir).squaredNorm() >= R * R) continue;
+      if (solver->velocity(i).dot(m.flight_dir) < vf) return false;
+    }
+    return true;
+  }
+
+  // Nodes connected to a clamped node (or, for a fabric without clamps, to the node
+  // farthest from the impact) through unbroken elements and touching crossings.
+  std::vector<char> attached_nodes() const {
+    const Model& m = model();
+    const int n = m.node_count;
+    std::vector<int> parent(n);
+    for (int i = 0; i < n; ++i) parent[i] = i;
+    auto find = [&](int a) {
+      while (parent[a] != a) a = parent[a] = parent[parent[a]];
+      return a;
+    };
+    auto join = [&](int a, int b) { parent[find(a)] = find(b); };
+    for (int e = 0; e < m.element_count; ++e)
+      if (!solver->broken(e)) join(m.elem_a[e], m.elem_b[e]);
+    for (int c = 0; c < int(m.crossings.size()); ++c) {
+      if (!solver->crossing_active(c) || solver->crossing_gap(c) > m.crossings[c].contact_distance) continue;
+      const auto& cr = m.crossings[c];
+      join(m.yarn_node(cr.warp_yarn, solver->crossing_warp_node(c)), m.yarn_node(cr.weft_yarn, solver->crossing_weft_node(c)));
+    }
+    std::vector<char> root_anchor(n, 0);
+    bool any = false;
+    for (int i = 0; i < n; ++i)
+      if (m.fixed[i] == fix_all) root_anchor[find(i)] = 1, any = true;
+    if (!any) {
+      int far = 0;
+      double best = -1;
+      for (int i = 0; i < n; ++i)
+        if (m.x0[i].squaredNorm() > best) best = m.x0[i].squaredNorm(), far = i;
+      root_anchor[find(far)] = 1;
+    }
+    std::vector<char> out(n);
+    for (int i = 0; i < n; ++i) out[i] = root_anchor[find(i)];
+    return out;
+  }
+
+  void finish(RunStatus s, EndReason r, const std::string& why) {
+    if (status != RunStatus::running) return;
+    status = s;
+    reason = r;
+    diagnosis = why;
+    if (history.empty() || history.back().t_s < solver->ledger_time()) history.push_back(sample());
+  }
+
+  bool step() {
+    if (status != RunStatus::running) return false;
+    solver->step();
+    const long n = solver->steps();
+    if (n % sample_every == 0) {
+      history.push_back(sample());
+      worst_balance = std::max(worst_balance, std::abs(history.back().balance_error));
+    }
+    if (solver->diverged()) {
+      finish(RunStatus::diverged, EndReason::diverged, solver->divergence() + ". " + advice());
+      return false;
+    }
+    if (n % 16 == 0 || solver->time() >= model().end_time) {
+      if (perforation_confirmed()) {
+        perforation_time = solver->last_contact_time();
+        finish(RunStatus::completed, EndReason::perforated, "the projectile passed through the fabric");
+        return false;
+      }
+      if (solver->had_contact() && forward_velocity() < 0) {
+        finish(RunStatus::completed, EndReason::rebounded, "the fabric stopped the projectile and turned it back");
+        return false;
+      }
+      const Vec3d xp = solver->projectile_position();
+      if (!std::isfinite(xp.norm()) || xp.norm() > 10 * (model().half_width + model().half_length) + 1) {
+        finish(RunStatus::diverged, EndReason::diverged, "the projectile left the domain without perforating");
+        return false;
+      }
+    }
+    if (solver->time() >= model().end_time - 0.5 * model().dt) {
+      finish(RunStatus::completed, EndReason::end_time,
+             "reached solver.end_time_us before perforation or rebound");
+      return false;
+    }
+    return true;
+  }
+
+  std::string advice() const {
+    const Model& m = model();
+    const double alpha = scene.solver.dt_factor;
+    if (alpha > 0.9 * m.critical_dt_factor)
+      return "solver.dt_factor = " + fmt("%.3g", alpha) + " is at or beyond the central-difference stability limit (about " +
+             fmt("%.2f", m.critical_dt_factor) + " for this mesh): lower solver.dt_factor (default 0.5)";
+    return "lower solver.dt_factor (default 0.5) or raise solver.contact_iterations; check the scene's units";
+  }
+};
+
+Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  impl_->scene = scene;
+  Model m = build_model(scene);
+  impl_->solver = make_solver(m, scene.solver.precision, scene.solver.threads);
+  impl_->solver->set_divergence_factor(scene.solver.divergence_energy_factor);
+  impl_->sample_every = std::max<long>(1, std::lround(scene.output.history_interval_s / m.dt));
+  impl_->warnings = scene.warnings;
+  impl_->history.push_back(impl_->sample());
+}
+
+Simulation::~Simulation() = default;
+
+bool Simulation::step() { return impl_->step(); }
+
+void Simulation::run(const std::atomic<bool>* interrupt, const std::function<void(const Simulation&)>& on_sample) {
+  const auto t0 = std::chrono::steady_clock::now();
+  size_t seen = impl_->history.size();
+  while (impl_->status == RunStatus::running) {
+    if (interrupt && interrupt->load(std::memory_order_relaxed)) {
+      this->interrupt("interrupted by signal");
+      break;
+    }
+    impl_->step();
+    if (on_sample && impl_->history.size() != seen) {
+      seen = impl_->history.size();
+      on_sample(*this);
+    }
+  }
+  impl_->wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void Simulation::interrupt(const std::string& why) {
+  impl_->finish(RunStatus::interrupted, EndReason::interrupted, why);
+}
+
+bool Simulation::finished() const { return impl_->status != RunStatus::running; }
+double Simulation::time_s() const { return impl_->solver->time(); }
+long Simulation::step_count() const { return impl_->solver->steps(); }
+double Simulation::dt_s() const { return impl_->model().dt; }
+const Scene& Simulation::scene() const { return impl_->scene; }
+const std::vector<HistoryRow>& Simulation::history() const { return impl_->history; }
+const Solver& Simulation::solver() const { return *impl_->solver; }
+Solver& Simulation::solver() { return *impl_->solver; }
+std::uint64_t Simulation::state_hash() const { return impl_->solver->state_hash(); }
+
+Summary Simulation::summary() const {
+  const Impl& I = *impl_;
+  const Model& m = I.model();
+  Summary s;
+  s.scene_name = I.scene.name;
+  s.status = I.status;
+  s.end_reason = I.reason;
+  s.diagnosis = I.diagnosis;
+  s.perforated = I.reason == EndReason::perforated;
+  s.impact_velocity_mps = m.impact_velocity;
+  const double vf = I.forward_velocity();
+  // Residual velocity: the exit speed after perforation; 0 when the fabric stopped the
+  // projectile; the current forward speed when the run ended undecided.
+  s.residual_velocity_mps = s.perforated ? vf : (I.reason == EndReason::rebounded ? 0.0 : std::max(0.0, vf));
+  s.energy_absorbed_J = 0.5 * m.projectile_mass_full *
+                        (m.impact_velocity * m.impact_velocity - s.residual_velocity_mps * s.residual_velocity_mps);
+  s.perforation_time_s = I.perforation_time;
+  s.energy_balance_error = I.worst_balance;
+  s.friction_work_J = I.solver->ledger().friction_work_J * m.symmetry_factor;
+  s.model = m.symmetry_label;
+  s.model_reason = m.symmetry_reason;
+  s.contact_model = to_string(m.contact);
+  s.node_count = m.node_count;
+  s.element_count = m.element_count;
+  s.crossing_count = int(m.crossings.size());
+  s.step_count = I.solver->steps();
+  s.dt_s = m.dt;
+  s.end_time_s = I.solver->time();
+  s.wall_time_s = I.wall_s;
+  s.node_steps_per_s = I.wall_s > 0 ? double(m.node_count) * double(s.step_count) / I.wall_s : 0;
+  s.broken_warp = int(std::lround(I.solver->broken_count(warp) * m.symmetry_factor));
+  s.broken_weft = int(std::lround(I.solver->broken_count(weft) * m.symmetry_factor));
+  // Broken yarns (whole fabric): a yarn on a symmetry plane stands for one yarn, others for two.
+  for (int y = 0; y < m.yarn_count(); ++y) {
+    bool any = false;
+    for (int e = m.yarn_elem_offset[y]; e < m.yarn_elem_offset[y + 1] && !any; ++e) any = I.solver->broken(e);
+    if (!any) continue;
+    const bool is_warp = m.yarn_family[y] == warp;
+    const bool mirrored = is_warp ? m.mirror_x : m.mirror_y;
+    const int count = mirrored && m.yarn_grid[y] != 0 ? 2 : 1;
+    (is_warp ? s.broken_warp_yarns : s.broken_weft_yarns) += count;
+  }
+  double ms = 0;
+  for (const auto& r : I.history) ms = std::max(ms, r.max_strain);
+  s.max_strain = ms;
+  s.warnings = I.warnings;
+  const auto& d = I.solver->diagnostics();
+  auto at = [](double t, int i, int j) {
+    return " (first at t = " + fmt("%.3g", t * 1e6) + " us, crossing I=" + std::to_string(i) + ", J=" + std::to_string(j) + ")";
+  };
+  if (d.skipped_nodes)
+    s.warnings.push_back("nearest-pair search: yarns slid more than one node in one step " +
+                         std::to_string(d.skipped_nodes) + " times" + at(d.first_skip_time, d.first_skip_i, d.first_skip_j) +
+                         "; the 3 x 3 search assumes at most one; lower solver.dt_factor");
+  if (d.ravelled)
+    s.warnings.push_back(std::to_string(d.ravelled) + " crossings ravelled out (a yarn slipped off its partner's free or broken end) and were released" +
+                         at(d.first_ravel_time, d.first_ravel_i, d.first_ravel_j));
+  if (d.passed_through)
+    s.warnings.push_back(std::to_string(d.passed_through) +
+                         " crossings found with yarns passed through each other by more than a yarn diameter; released" +
+                         at(d.first_pass_time, d.first_pass_i, d.first_pass_j));
+  if (I.reason == EndReason::end_time)
+    s.warnings.push_back("the run reached solver.end_time_us = " + fmt("%.4g", m.end_time * 1e6) +
+                         " us undecided (neither perforated nor stopped); raise solver.end_time_us");
+  return s;
+}
+
+Frame Simulation::frame() const {
+  const Impl& I = *impl_;
+  const Model& m = I.model();
+  const Solver& S = *I.solver;
+  Frame f;
+  f.scene_name = I.scene.name;
+  f.model_label = m.symmetry_label + ", " + to_string(m.contact);
+  f.time_s = S.time();
+  f.friction = I.scene.yarn.friction;
+  f.impact_velocity_mps = m.impact_velocity;
+  f.perforated = I.reason == EndReason::perforated;
+  f.node_pos.resize(m.node_count);
+  f.node_vel.resize(m.node_count);
+  f.node_slip_rate.assign(m.node_count, 0.f);
+  for (int i = 0; i < m.node_count; ++i) {
+    const Vec3d x = S.position(i), v = S.velocity(i);
+    f.node_pos[i] = {float(x.x()), float(x.y()), float(x.z())};
+    f.node_vel[i] = {float(v.x()), float(v.y()), float(v.z())};
+  }
+  for (size_t c = 0; c < m.crossings.size(); ++c) {
+    const float r = float(S.crossing_slip_rate(int(c)));
+    if (r <= 0) continue;
+    const auto& cr = m.crossings[c];
+    const int a = m.yarn_node(cr.warp_yarn, S.crossing_warp_node(int(c)));
+    const int b = m.yarn_node(cr.weft_yarn, S.crossing_weft_node(int(c)));
+    f.node_slip_rate[a] = std::max(f.node_slip_rate[a], r);
+    f.node_slip_rate[b] = std::max(f.node_slip_rate[b], r);
+  }
+  const int ne = m.element_count;
+  f.elem_a.resize(ne);
+  f.elem_b.resize(ne);
+  f.elem_family.resize(ne);
+  f.elem_broken.resize(ne);
+  f.elem_yarn.resize(ne);
+  f.elem_strain.resize(ne);
+  f.elem_stress_pa.resize(ne);
+  for (int e = 0; e < ne; ++e) {
+    f.elem_a[e] = std::uint32_t(m.elem_a[e]);
+    f.elem_b[e] = std::uint32_t(m.elem_b[e]);
+    f.elem_yarn[e] = std::uint32_t(m.elem_yarn[e]);
+    f.elem_family[e] = m.yarn_family[m.elem_yarn[e]];
+    f.elem_broken[e] = S.broken(e) ? 1 : 0;
+    f.elem_strain[e] = float(S.strain(e));
+    f.elem_stress_pa[e] = float(S.stress(e));
+  }
+  f.failure_strain = float(m.failure_strain);
+  f.yarn_diameter_m = float(0.5 * m.thickness);
+  f.mirror_x = m.mirror_x;
+  f.mirror_y = m.mirror_y;
+  f.half_width_m = float(m.half_width);
+  f.half_length_m = float(m.half_length);
+  f.clamped_left = m.clamped.left;
+  f.clamped_right = m.clamped.right;
+  f.clamped_bottom = m.clamped.bottom;
+  f.clamped_top = m.clamped.top;
+  f.projectile_shape = int(m.shape.kind);
+  const Vec3d xp = S.projectile_position();
+  f.projectile_pos = {float(xp.x()), float(xp.y()), float(xp.z())};
+  f.projectile_axis = {float(m.flight_dir.x()), float(m.flight_dir.y()), float(m.flight_dir.z())};
+  f.projectile_radius_m = float(m.shape.radius);
+  f.projectile_length_m = float(m.shape.length);
+  return f;
+}
+
+}  // namespace ravel

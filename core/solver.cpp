@@ -1,0 +1,805 @@
+// SolverT<Real>: the stages named in solver.h, in single or double precision.
+#include "solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+
+#include "geometry.h"
+#include "material.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace ravel {
+
+std::uint64_t Solver::state_hash() const {
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the raw bytes of the state
+  hash_into(h);
+  return h;
+}
+
+namespace {
+
+inline void fnv(std::uint64_t& h, const void* data, size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < n; ++i) {
+    h ^= p[i];
+    h *= 1099511628211ull;
+  }
+}
+
+template <class Real>
+class SolverT final : public Solver {
+ public:
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+
+  SolverT(const Model& m, int threads) : Solver(m) {
+    const int n = model_.node_count, ne = model_.element_count;
+    x_.resize(n);
+    v_.resize(n);
+    f_.resize(n);
+    v_prev_.assign(n, V3::Zero());
+    dv_contact_.assign(n, V3::Zero());
+    dv_friction_.assign(n, V3::Zero());
+    dv_pfriction_.assign(n, V3::Zero());
+    for (int i = 0; i < n; ++i) {
+      x_[i] = model_.x0[i].cast<Real>();
+      v_[i].setZero();
+      f_[i].setZero();
+    }
+    strain_.assign(ne, Real(0));
+    prev_strain_.assign(ne, Real(0));
+    ev_.assign(ne, Real(0));
+    stress_.assign(ne, Real(0));
+    broken_flag_.assign(ne, 0);
+    elem_force_.assign(ne, V3::Zero());
+    elem_energy_.assign(ne, 0.0);
+    elem_diss_.assign(ne, 0.0);
+    bend_force_.assign(model_.bend_k.size(), V3::Zero());
+    bend_energy_.assign(model_.bend_k.size(), 0.0);
+    for (int e = 0; e < ne; ++e) {
+      // Initial strain (slack for the straight-chord models).
+      const Real len = (x_[model_.elem_b[e]] - x_[model_.elem_a[e]]).norm();
+      strain_[e] = prev_strain_[e] = len / Real(model_.elem_rest[e]) - Real(1);
+    }
+    build_incidence();
+    const int nc = int(model_.crossings.size());
+    cr_kw_.resize(nc);
+    cr_kf_.resize(nc);
+    cr_stick_w_.assign(nc, -1.0);
+    cr_stick_f_.assign(nc, -1.0);
+    cr_active_.assign(nc, 1);
+    cr_fn_.assign(nc, 0.0);
+    cr_ft_.assign(nc, 0.0);
+    cr_slip_.assign(nc, 0.0);
+    cr_gap_.assign(nc, 0.0);
+    cr_sliding_.assign(nc, 0);
+    cr_fn_step_.assign(nc, 0.0);
+    for (int c = 0; c < nc; ++c) {
+      cr_kw_[c] = model_.crossings[c].warp_node;
+      cr_kf_[c] = model_.crossings[c].weft_node;
+    }
+    xp_ = model_.projectile_x0.cast<Real>();
+    vp_ = (model_.impact_velocity * model_.flight_dir).cast<Real>();
+    const ZenerConstants zc{model_.k1, model_.k2, model_.damping};
+    zener_ = zc;
+    decay_ = model_.material == Material::zener ? std::exp(-model_.dt / zc.tau()) : 1.0;
+    slack_decay_ = model_.material == Material::zener ? std::exp(-model_.dt * zc.k2 / zc.mu) : 1.0;
+    set_threads(threads);
+    // Initial ledger: all energy is the projectile's.
+    ke_half_ = 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
+    ledger_.projectile_ke_J = ke_half_;
+    escape_radius2_ = std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2);
+  }
+
+  void set_threads(int n) override {
+#ifdef _OPENMP
+    threads_ = n <= 0 ? omp_get_num_procs() : n;
+#else
+    threads_ = 1;
+    (void)n;
+#endif
+  }
+
+  void step() override {
+    if (!divergence_.empty()) return;
+    internal_forces();   // Eq 3, 23: element stress from strain; bending; failure
+    close_ledger_row();  // ledger at t - dt/2
+    integrate();         // Eq 1-2
+    if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
+    projectile_contact();                           // Eq 18-22
+    symmetry_planes();                              // mirror images do not interpenetrate
+    finish_step();
+  }
+
+  Vec3d projectile_position() const override { return xp_.template cast<double>(); }
+  Vec3d projectile_velocity() const override { return vp_.template cast<double>(); }
+  Vec3d position(int i) const override { return x_[i].template cast<double>(); }
+  Vec3d velocity(int i) const override { return v_[i].template cast<double>(); }
+  void set_velocity(int i, const Vec3d& v) override { v_[i] = v.cast<Real>(); }
+  void set_position(int i, const Vec3d& x) override { x_[i] = x.cast<Real>(); }
+  void set_projectile_velocity(const Vec3d& v) override {
+    vp_ = v.cast<Real>();
+    ke_half_ = fabric_ke() + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
+  }
+  void set_projectile_position(const Vec3d& x) override { xp_ = x.cast<Real>(); }
+  double strain(int e) const override { return double(strain_[e]); }
+  double stress(int e) const override { return double(stress_[e]); }
+  bool broken(int e) const override { return broken_flag_[e] != 0; }
+  bool crossing_active(int c) const override { return cr_active_[c] != 0; }
+  bool crossing_sliding(int c) const override { return cr_sliding_[c] != 0; }
+  double crossing_normal_force(int c) const override { return cr_fn_[c]; }
+  double crossing_friction_force(int c) const override { return cr_ft_[c]; }
+  double crossing_slip_rate(int c) const override { return cr_slip_[c]; }
+  double crossing_gap(int c) const override { return cr_gap_[c]; }
+  int crossing_warp_node(int c) const override { return cr_kw_[c]; }
+  int crossing_weft_node(int c) const override { return cr_kf_[c]; }
+
+ protected:
+  void hash_into(std::uint64_t& h) const override {
+    fnv(h, x_.data(), x_.size() * sizeof(V3));
+    fnv(h, v_.data(), v_.size() * sizeof(V3));
+    fnv(h, ev_.data(), ev_.size() * sizeof(Real));
+    fnv(h, broken_flag_.data(), broken_flag_.size());
+    fnv(h, cr_stick_w_.data(), cr_stick_w_.size() * sizeof(double));
+    fnv(h, cr_stick_f_.data(), cr_stick_f_.size() * sizeof(double));
+    fnv(h, xp_.data(), sizeof(V3));
+    fnv(h, vp_.data(), sizeof(V3));
+  }
+
+ private:
+  // ---------------------------------------------------------------- set-up
+  // Node -> (element, sign) and node -> (bending spring, weight) lists, so forces are
+  // gathered per node: race-free in parallel and independent of the thread count.
+  void build_incidence() {
+    const int n = model_.node_count;
+    std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
+    for (int e = 0; e < model_.element_count; ++e) {
+      ne[model_.elem_b[e]].push_back({e, Real(1)});   // element force acts on b, -force on a
+      ne[model_.elem_a[e]].push_back({e, Real(-1)});
+    }
+    for (size_t s = 0; s < model_.bend_k.size(); ++s) {
+      // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
+      const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+      nb[model_.elem_a[e1]].push_back({int(s), Real(-0.5)});
+      nb[model_.elem_b[e1]].push_back({int(s), Real(-0.5)});
+      nb[model_.elem_a[e2]].push_back({int(s), Real(0.5)});
+      nb[model_.elem_b[e2]].push_back({int(s), Real(0.5)});
+    }
+    inc_e_off_.assign(n + 1, 0);
+    inc_b_off_.assign(n + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      inc_e_off_[i + 1] = inc_e_off_[i] + int(ne[i].size());
+      inc_b_off_[i + 1] = inc_b_off_[i] + int(nb[i].size());
+      for (auto& p : ne[i]) inc_e_.push_back(p);
+      for (auto& p : nb[i]) inc_b_.push_back(p);
+    }
+  }
+
+  // ---------------------------------------------------------------- stages
+  // Element strain from positions, constitutive update, failure, element force vectors,
+  // bending springs, then gather into nodal forces.
+  void internal_forces() {
+    const int ne = model_.element_count;
+    const bool zener = model_.material == Material::zener;
+    const double E = model_.modulus_inst;
+    const double fail = model_.failure_strain;
+    const bool breakable = model_.breakable;
+    double stored = 0, diss = 0, released = 0, max_strain = 0;
+    int newly_broken[2] = {0, 0};
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released) \
+    reduction(max : max_strain) if (threads_ > 1)
+    for (int e = 0; e < ne; ++e) {
+      if (broken_flag_[e]) {
+        elem_force_[e].setZero();
+        continue;
+      }
+      const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
+      const Real len = dx.norm();
+      const double rest = model_.elem_rest[e];
+      const Real eps = len / Real(rest) - Real(1);
+      const double vol = model_.elem_area[e] * rest;
+      double sig, u, dd = 0;
+      if (zener) {
+        const ZenerStep zs = zener_update(zener_, prev_strain_[e], eps, ev_[e], model_.dt, decay_, slack_decay_);
+        ev_[e] = Real(zs.ev);
+        sig = zs.stress;
+        u = zener_stored(zener_, sig, zs.ev) * vol;
+        dd = zs.dissipated * vol;
+      } else {
+        sig = eps > 0 ? E * double(eps) : 0.0;
+        u = sig * sig / (2 * E) * vol;
+      }
+      prev_strain_[e] = eps;
+      strain_[e] = eps;
+      diss += dd;
+      if (breakable && double(eps) >= fail) {
+        // Failure: the element is removed for good, its energy is released (SPEC §1).
+        broken_flag_[e] = 1;
+        released += u;
+        stress_[e] = 0;
+        elem_force_[e].setZero();
+        continue;
+      }
+      stored += u;
+      stress_[e] = Real(sig);
+      max_strain = std::max(max_strain, double(eps));
+      // Force on node b: -sigma A along the element (pulls b towards a).
+      elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig * model_.elem_area[e] / double(len))) : V3::Zero();
+    }
+    for (int e = 0; e < ne; ++e) {
+      // Count failures serially (cheap) to keep the count per family.
+      if (broken_flag_[e] == 1) {
+        broken_flag_[e] = 2;
+        newly_broken[model_.yarn_family[model_.elem_yarn[e]]]++;
+      }
+    }
+    broken_[0] += newly_broken[0];
+    broken_[1] += newly_broken[1];
+    // Bending: compression-only springs between midpoints of adjoining elements.
+    const int nbend = int(model_.bend_k.size());
+    double bend_stored = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : bend_stored) if (threads_ > 1)
+    for (int s = 0; s < nbend; ++s) {
+      const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+      if (broken_flag_[e1] || broken_flag_[e2]) {
+        bend_force_[s].setZero();
+        continue;
+      }
+      const V3 m1 = Real(0.5) * (x_[model_.elem_a[e1]] + x_[model_.elem_b[e1]]);
+      const V3 m2 = Real(0.5) * (x_[model_.elem_a[e2]] + x_[model_.elem_b[e2]]);
+      const V3 d = m2 - m1;
+      const Real len = d.norm();
+      const double comp = model_.bend_rest[s] - double(len);
+      if (comp <= 0 || len <= Real(0)) {
+        bend_force_[s].setZero();
+        continue;
+      }
+      bend_stored += 0.5 * model_.bend_k[s] * comp * comp;
+      bend_force_[s] = d * Real(model_.bend_k[s] * comp / double(len));  // pushes midpoint 2 away from 1
+    }
+    // Gather.
+    const int n = model_.node_count;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
+    for (int i = 0; i < n; ++i) {
+      V3 f = V3::Zero();
+      for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) f += inc_e_[k].second * elem_force_[inc_e_[k].first];
+      for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * bend_force_[inc_b_[k].first];
+      f_[i] = f;
+    }
+    stored_now_ = stored + bend_stored;
+    viscous_cum_ += diss;
+    released_cum_ += released;
+    max_strain_ = max_strain;
+  }
+
+  // The ledger at t - dt/2 (see the header comment): kinetic energy of v(t - dt/2), the
+  // mean of stored / cumulative-dissipation values at t - dt and t.
+  void close_ledger_row() {
+    if (steps_ == 0) {
+      stored_prev_ = stored_now_;
+      viscous_prev_ = viscous_cum_;
+      released_prev_ = released_cum_;
+      return;
+    }
+    Ledger& l = ledger_;
+    l.fabric_ke_J = ke_fabric_half_;
+    l.projectile_ke_J = ke_half_ - ke_fabric_half_;
+    l.strain_energy_J = 0.5 * (stored_prev_ + stored_now_);
+    l.viscous_J = 0.5 * (viscous_prev_ + viscous_cum_);
+    l.released_J = 0.5 * (released_prev_ + released_cum_);
+    l.friction_work_J = friction_cum_;
+    l.projectile_friction_J = pfriction_cum_;
+    l.contact_loss_J = contact_cum_;
+    stored_prev_ = stored_now_;
+    viscous_prev_ = viscous_cum_;
+    released_prev_ = released_cum_;
+    const double e0 = 0.5 * model_.projectile_mass * model_.impact_velocity * model_.impact_velocity;
+    const double total = l.total();
+    if (!std::isfinite(total)) {
+      fail("the energy ledger became NaN/infinite (a node or element went non-finite)");
+    } else if (e0 > 0 && total > e0 * divergence_factor_) {
+      fail("the total energy rose to " + fmt(total / e0) + " x the initial energy with no source: the explicit "
+           "integration is unstable");
+    }
+  }
+
+  // Eq 1-2: v(t+dt/2) = v(t-dt/2) + dt/m f; x(t+dt) = x(t) + dt v(t+dt/2). Fixed velocity
+  // components (clamps, symmetry planes) stay zero.
+  void integrate() {
+    const int n = model_.node_count;
+    const Real dt = Real(model_.dt);
+    double maxr2 = 0;
+    v_prev_ = v_;
+    std::fill(dv_contact_.begin(), dv_contact_.end(), V3::Zero());
+    std::fill(dv_friction_.begin(), dv_friction_.end(), V3::Zero());
+    std::fill(dv_pfriction_.begin(), dv_pfriction_.end(), V3::Zero());
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) if (threads_ > 1)
+    for (int i = 0; i < n; ++i) {
+      const std::uint8_t fx = model_.fixed[i];
+      if (fx == fix_all) continue;
+      V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
+      if (fx & fix_x) v.x() = 0;
+      if (fx & fix_y) v.y() = 0;
+      if (fx & fix_z) v.z() = 0;
+      v_[i] = v;
+      x_[i] += dt * v;
+      maxr2 = std::max(maxr2, double(x_[i].squaredNorm()));
+    }
+    xp_ += dt * vp_;
+    if (!(maxr2 < escape_radius2_))
+      fail("a yarn node escaped the domain (more than 10 fabric sizes from the centre) or became NaN");
+  }
+
+  // ------------------------------------------------------------ yarn contact (Eq 5-17)
+  struct SegPoint {
+    int seg;   // segment index along the yarn (nodes seg, seg+1)
+    Real a;    // fraction along it
+  };
+
+  int ynode(int yarn, int k) const { return model_.yarn_node(yarn, k); }
+  bool seg_ok(int yarn, int s) const {
+    return s >= 0 && s + 1 < model_.yarn_size(yarn) && !broken_flag_[model_.yarn_elem_offset[yarn] + s];
+  }
+  Real seg_len(int yarn, int s) const { return (x_[ynode(yarn, s + 1)] - x_[ynode(yarn, s)]).norm(); }
+
+  // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
+  Real arc_between(int yarn, double u0, double u1) const {
+    const int n = model_.yarn_size(yarn);
+    double sign = 1;
+    if (u1 < u0) std::swap(u0, u1), sign = -1;
+    int s0 = std::min(int(std::floor(u0)), n - 2), s1 = std::min(int(std::floor(u1)), n - 2);
+    if (s0 == s1) return Real(sign * (u1 - u0)) * seg_len(yarn, s0);
+    Real acc = Real(s0 + 1 - u0) * seg_len(yarn, s0);
+    for (int s = s0 + 1; s < s1; ++s) acc += seg_len(yarn, s);
+    acc += Real(u1 - s1) * seg_len(yarn, s1);
+    return Real(sign) * acc;
+  }
+  // Material coordinate reached by moving an arc length `arc` (signed) from u.
+  double advance(int yarn, double u, double arc) const {
+    const int n = model_.yarn_size(yarn);
+    int s = std::min(int(std::floor(u)), n - 2);
+    double frac = u - s;
+    while (true) {
+      const double L = double(seg_len(yarn, s));
+      if (L <= 0) return u;
+      const double room = arc >= 0 ? (1 - frac) * L : frac * L;
+      if (std::abs(arc) <= room || (arc >= 0 ? s == n - 2 : s == 0)) {
+        double nf = frac + arc / L;
+        return s + std::clamp(nf, 0.0, 1.0);
+      }
+      arc += arc >= 0 ? -room : room;
+      if (arc >= 0) ++s, frac = 0;
+      else --s, frac = 1;
+    }
+  }
+
+  // Apply impulse P to the weft point and -P to the warp point, with closest-point
+  // weights; the velocity change is recorded against its mechanism (`acc`) for the ledger.
+  void apply_pair_impulse(int n0, int n1, Real a, int q0, int q1, Real b, const V3& P, std::vector<V3>& acc) {
+    int ids[4] = {n0, n1, q0, q1};
+    Real w[4] = {-(Real(1) - a), -a, Real(1) - b, b};
+    const Real dt = Real(model_.dt);
+    for (int k = 0; k < 4; ++k) {
+      const int i = ids[k];
+      const Real im = Real(model_.inv_mass[i]);
+      if (im == Real(0) || w[k] == Real(0)) continue;
+      V3 dv = (w[k] * im) * P;
+      const std::uint8_t fx = model_.fixed[i];
+      if (fx & fix_x) dv.x() = 0;
+      if (fx & fix_y) dv.y() = 0;
+      if (fx & fix_z) dv.z() = 0;
+      v_[i] += dv;
+      acc[i] += dv;
+      x_[i] += dt * dv;  // the predicted position follows the velocity change (Eq 2)
+    }
+  }
+
+  // Work of a correction in the leapfrog's own energy statement. With v- = v(t-dt/2) and
+  // v+ = v(t+dt/2) after all corrections, KE(v+) - KE(v-) = sum over forces F of
+  // F . (dx(t-dt/2) + dx(t+dt/2)) / 2 exactly; a correction dv is a force m dv/dt, so its
+  // work is m dv . (v- + v+) / 2. (Booking the bare kinetic-energy change of each correction
+  // instead would count, every step, energy a resting contact never takes.)
+  double correction_work(const std::vector<V3>& acc) const {
+    double w = 0;
+    for (int i = 0; i < model_.node_count; ++i) {
+      if (acc[i].isZero()) continue;
+      w += 0.5 * model_.mass[i] * double(acc[i].dot(v_prev_[i] + v_[i]));
+    }
+    return w;
+  }
+
+  // Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
+  // edge of the window is searched once more; moving again means the yarns slid more than
+  // one node in one step, which the method assumes never happens: reported, not hidden.
+  void track(int c) {
+    const Crossing& cr = model_.crossings[c];
+    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+    for (int round = 0; round < 4; ++round) {
+      int bw = cr_kw_[c], bf = cr_kf_[c];
+      Real best = (x_[ynode(cr.weft_yarn, bf)] - x_[ynode(cr.warp_yarn, bw)]).squaredNorm();
+      for (int dw = -1; dw <= 1; ++dw) {
+        const int kw = cr_kw_[c] + dw;
+        if (kw < 0 || kw >= nw) continue;
+        for (int df = -1; df <= 1; ++df) {
+          const int kf = cr_kf_[c] + df;
+          if (kf < 0 || kf >= nf || (dw == 0 && df == 0)) continue;
+          const Real d2 = (x_[ynode(cr.weft_yarn, kf)] - x_[ynode(cr.warp_yarn, kw)]).squaredNorm();
+          if (d2 < best) best = d2, bw = kw, bf = kf;
+        }
+      }
+      if (bw == cr_kw_[c] && bf == cr_kf_[c]) return;
+      cr_kw_[c] = bw;
+      cr_kf_[c] = bf;
+      if (round == 1) {
+        if (diag_.skipped_nodes++ == 0) {
+          diag_.first_skip_time = time_;
+          diag_.first_skip_i = cr.grid_i;
+          diag_.first_skip_j = cr.grid_j;
+        }
+      }
+    }
+  }
+
+  void release(int c, long& counter, double& first_t, int& fi, int& fj) {
+    cr_active_[c] = 0;
+    cr_fn_[c] = cr_ft_[c] = cr_slip_[c] = 0;
+    cr_sliding_[c] = 0;
+    if (counter++ == 0) {
+      first_t = time_;
+      fi = model_.crossings[c].grid_i;
+      fj = model_.crossings[c].grid_j;
+    }
+  }
+
+  struct ContactGeom {
+    bool ok = false;
+    int sw = 0, sf = 0;
+    Real a = 0, b = 0;
+    V3 d;
+    Real dist = 0;
+  };
+
+  // Closest points between the adjoining segments of the two yarns (2 x 2 combinations).
+  ContactGeom closest(int c) const {
+    const Crossing& cr = model_.crossings[c];
+    ContactGeom g;
+    Real best = Real(1e30);
+    for (int sw = cr_kw_[c] - 1; sw <= cr_kw_[c]; ++sw) {
+      if (!seg_ok(cr.warp_yarn, sw)) continue;
+      for (int sf = cr_kf_[c] - 1; sf <= cr_kf_[c]; ++sf) {
+        if (!seg_ok(cr.weft_yarn, sf)) continue;
+        Real a, b;
+        V3 pa, pb;
+        closest_points_segments(x_[ynode(cr.warp_yarn, sw)], x_[ynode(cr.warp_yarn, sw + 1)],
+                                x_[ynode(cr.weft_yarn, sf)], x_[ynode(cr.weft_yarn, sf + 1)], a, b, pa, pb);
+        const V3 d = pb - pa;
+        const Real dist = d.norm();
+        if (dist < best) {
+          best = dist;
+          g.ok = true;
+          g.sw = sw;
+          g.sf = sf;
+          g.a = a;
+          g.b = b;
+          g.d = d;
+          g.dist = dist;
+        }
+      }
+    }
+    return g;
+  }
+
+  // Is the contact point at an end of the yarn beyond which it has no segment, with the
+  // partner lying beyond that end? Then the partner has slipped off (ravelled out).
+  bool slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
+    const V3 t = x_[ynode(yarn, seg + 1)] - x_[ynode(yarn, seg)];
+    const Real L = t.norm();
+    if (L <= Real(0)) return false;
+    const Real along = toward_partner.dot(t) / L;
+    const Real dist = toward_partner.norm();
+    const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
+                        !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
+    const bool at_start = frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) &&
+                          !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
+    if (at_end && along > Real(0.5) * dist) return true;
+    if (at_start && -along > Real(0.5) * dist) return true;
+    return false;
+  }
+
+  // Material coordinate (node index + fraction) of point p along a yarn near node k:
+  // projection on the chord joining k's neighbours (unit direction returned in `tangent`).
+  double chord_coord(int yarn, int k, const V3& p, V3& tangent) const {
+    const int km = seg_ok(yarn, k - 1) ? k - 1 : k;
+    const int kp = seg_ok(yarn, k) ? k + 1 : k;
+    const V3 T = x_[ynode(yarn, kp)] - x_[ynode(yarn, km)];
+    const Real T2 = T.squaredNorm();
+    if (kp == km || T2 <= Real(0)) {
+      tangent.setZero();
+      return k;
+    }
+    tangent = T / std::sqrt(T2);
+    const double off = double((p - x_[ynode(yarn, k)]).dot(T) / T2) * double(kp - km);
+    return k + std::clamp(off, double(km - k), double(kp - k));
+  }
+  // The two nodes and fraction of a material coordinate.
+  void coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
+    const int s = std::clamp(int(std::floor(u)), 0, model_.yarn_size(yarn) - 2);
+    frac = Real(std::clamp(u - s, 0.0, 1.0));
+    n0 = ynode(yarn, s);
+    n1 = ynode(yarn, s + 1);
+  }
+
+  void yarn_contact() {
+    const int nc = int(model_.crossings.size());
+    const int N = model_.contact_iterations;
+    const Real dt = Real(model_.dt);
+    std::fill(cr_fn_step_.begin(), cr_fn_step_.end(), 0.0);
+    std::fill(cr_ft_.begin(), cr_ft_.end(), 0.0);
+    for (int pass = 1; pass <= N; ++pass) {
+      // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
+      const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
+      const bool last = pass == N;
+      for (int c = 0; c < nc; ++c) {
+        if (!cr_active_[c]) continue;
+        const Crossing& cr = model_.crossings[c];
+        track(c);
+        ContactGeom g = closest(c);
+        if (!g.ok) {
+          release(c, diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+          continue;
+        }
+        const int w0 = ynode(cr.warp_yarn, g.sw), w1 = ynode(cr.warp_yarn, g.sw + 1);
+        const int f0 = ynode(cr.weft_yarn, g.sf), f1 = ynode(cr.weft_yarn, g.sf + 1);
+        const V3 tw = x_[w1] - x_[w0], tf = x_[f1] - x_[f0];
+        // Ravelled out: the partner has slipped off a free end.
+        if (slipped_off(cr.warp_yarn, g.sw, g.a, g.d) || slipped_off(cr.weft_yarn, g.sf, g.b, V3(-g.d))) {
+          release(c, diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+          continue;
+        }
+        // Side test: n from the weave (fixed sign) and the current segment directions.
+        V3 n = tw.cross(tf);
+        const Real nn = n.norm();
+        if (nn > Real(1e-20)) n *= Real(cr.side) / nn;
+        else n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+        const Real D = Real(cr.contact_distance);
+        const Real s = g.d.dot(n);
+        Real delta;
+        V3 u;
+        if (s >= Real(0)) {
+          delta = D - g.dist;
+          u = g.dist > Real(1e-12) * D ? V3(g.d / g.dist) : n;
+        } else {
+          if (g.dist > D) {
+            // Passed through by more than a yarn diameter: the correction would be a jump
+            // of more than 2D in one step; the nearest-pair assumption is broken here.
+            release(c, diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
+            continue;
+          }
+          delta = D + g.dist;
+          u = g.dist > Real(1e-12) * D ? V3(-g.d / g.dist) : n;
+        }
+        // Effective inverse mass of the relative motion of the two contact points.
+        const Real a = g.a, b = g.b;
+        const Real winv = (Real(1) - a) * (Real(1) - a) * Real(model_.inv_mass[w0]) + a * a * Real(model_.inv_mass[w1]) +
+                          (Real(1) - b) * (Real(1) - b) * Real(model_.inv_mass[f0]) + b * b * Real(model_.inv_mass[f1]);
+        if (winv <= Real(0)) continue;  // all four nodes clamped
+        if (delta > Real(0)) {
+          // Eq 9-10 (with node masses): a relative displacement alpha*delta within the step.
+          const Real P = alpha * delta / (dt * winv);
+          apply_pair_impulse(w0, w1, a, f0, f1, b, V3(P * u), dv_contact_);
+          cr_fn_step_[c] += double(P / dt);  // Eq 11
+        }
+        if (last) cr_gap_[c] = double(g.dist - D);
+        // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
+        // material coordinate on each yarn is the partner's contact point projected on this
+        // yarn's chord through its tracked node: continuous in time, unlike the raw closest
+        // point, which jumps between the four equivalent segment pairs of the zig-zag.
+        const V3 pa = (Real(1) - a) * x_[w0] + a * x_[w1];
+        const V3 pb = (Real(1) - b) * x_[f0] + b * x_[f1];
+        V3 Tw, Tf;
+        const double cw = chord_coord(cr.warp_yarn, cr_kw_[c], pb, Tw);
+        const double cf = chord_coord(cr.weft_yarn, cr_kf_[c], pa, Tf);
+        if (cr_stick_w_[c] < 0) cr_stick_w_[c] = cw, cr_stick_f_[c] = cf;
+        int fw0, fw1, ff0, ff1;
+        Real fa, fb;
+        coord_nodes(cr.warp_yarn, cw, fw0, fw1, fa);
+        coord_nodes(cr.weft_yarn, cf, ff0, ff1, fb);
+        const double fwinv = double((Real(1) - fa) * (Real(1) - fa) * Real(model_.inv_mass[fw0]) +
+                                    fa * fa * Real(model_.inv_mass[fw1]) +
+                                    (Real(1) - fb) * (Real(1) - fb) * Real(model_.inv_mass[ff0]) +
+                                    fb * fb * Real(model_.inv_mass[ff1]));
+        const double fn = cr_fn_step_[c];
+        const double limit = model_.friction * fn;
+        double ft_w = 0, ft_f = 0;
+        bool slid = false;
+        double moved = 0;
+        if (fwinv > 0) {
+          // K = alpha_f m / dt^2 with m the effective mass of the relative motion: alpha_f = 1
+          // returns the contact to its stuck point in exactly one step.
+          const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
+          auto one_yarn = [&](int yarn, double cur, double& stick, double& force) {
+            const double slip = double(arc_between(yarn, stick, cur));  // Delta s of Eq 12
+            const double trial = K * slip;
+            if (std::abs(trial) <= limit) {
+              force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
+            } else {
+              force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
+              const double new_stick = advance(yarn, cur, -force / K);
+              moved += std::abs(double(arc_between(yarn, stick, new_stick)));
+              stick = new_stick;
+              slid = true;
+            }
+          };
+          one_yarn(cr.warp_yarn, cw, cr_stick_w_[c], ft_w);
+          one_yarn(cr.weft_yarn, cf, cr_stick_f_[c], ft_f);
+        }
+        if (ft_w != 0 || ft_f != 0) {
+          // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
+          const V3 Fwarp = Real(ft_w) * Tw - Real(ft_f) * Tf;
+          // apply_pair_impulse gives +P to the weft, -P to the warp.
+          apply_pair_impulse(fw0, fw1, fa, ff0, ff1, fb, V3(-alpha * dt * Fwarp), dv_friction_);
+          cr_ft_[c] = double(Fwarp.norm());
+        }
+        if (last) {
+          cr_sliding_[c] = slid;
+          cr_slip_[c] = moved / double(dt);
+          cr_fn_[c] = fn;
+        }
+      }
+    }
+    double fsum = 0;
+    int sliding = 0, stuck = 0;
+    double maxpen = 0;
+    for (int c = 0; c < nc; ++c) {
+      if (!cr_active_[c]) continue;
+      fsum += cr_fn_[c];
+      if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
+      maxpen = std::max(maxpen, -cr_gap_[c]);
+    }
+    yarn_force_ = fsum;
+    sliding_count_ = sliding;
+    stuck_count_ = stuck;
+    diag_.max_penetration = std::max(diag_.max_penetration, maxpen);
+  }
+
+  // ------------------------------------------------------- projectile contact (Eq 18-22)
+  void projectile_contact() {
+    const int n = model_.node_count;
+    const Real dt = Real(model_.dt);
+    const Real R = Real(model_.shape.bounding_radius());
+    const double mu_p = model_.projectile_friction;
+    const double Mp = model_.projectile_mass;
+    V3 impulse_normal = V3::Zero(), impulse_fric = V3::Zero();
+    int touching = 0;
+    for (int i = 0; i < n; ++i) {
+      const V3 rel = x_[i] - xp_;
+      if (std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R) continue;
+      if (model_.fixed[i] == fix_all) continue;
+      V3 nrm;
+      const double sd = model_.shape.sdf(rel, nrm);
+      if (sd > 0) continue;
+      ++touching;
+      const double m = model_.mass[i];
+      // Eq 19: push the node back onto the surface within one step.
+      const Real pen = Real(-sd);
+      V3 dv_n = (pen / dt) * nrm;
+      // Eq 20-22: friction from the tangential relative velocity, capped by mu_p |f_n|.
+      const V3 vr = v_[i] + dv_n - vp_;
+      const V3 vt = vr - vr.dot(nrm) * nrm;
+      const Real vtn = vt.norm();
+      V3 dv_t = V3::Zero();
+      if (vtn > Real(0)) {
+        const Real cap = Real(mu_p) * dv_n.norm();  // mu_p |f_n| dt / m
+        dv_t = -std::min(vtn, cap) * (vt / vtn);
+      }
+      const std::uint8_t fx = model_.fixed[i];
+      if (fx & fix_x) dv_t.x() = 0, dv_n.x() = 0;
+      if (fx & fix_y) dv_t.y() = 0, dv_n.y() = 0;
+      v_[i] += dv_n + dv_t;
+      x_[i] += dt * (dv_n + dv_t);
+      dv_contact_[i] += dv_n;
+      dv_pfriction_[i] += dv_t;
+      impulse_normal -= Real(m) * dv_n;
+      impulse_fric -= Real(m) * dv_t;
+    }
+    // The projectile takes the reactions: momentum is conserved.
+    if (touching) {
+      V3 dvp_n = impulse_normal / Real(Mp), dvp_t = impulse_fric / Real(Mp);
+      // In a symmetric model the mirrored parts' reactions cancel the in-plane components.
+      if (model_.mirror_x) dvp_n.x() = dvp_t.x() = 0;
+      if (model_.mirror_y) dvp_n.y() = dvp_t.y() = 0;
+      const V3 vp_old = vp_;
+      vp_ += dvp_n + dvp_t;
+      xp_ += dt * (vp_ - vp_old);
+      // Work of the reactions on the projectile (it has no other force: v- = vp_old).
+      const V3 vsum = vp_old + vp_;
+      contact_cum_ -= 0.5 * Mp * double(dvp_n.dot(vsum));
+      pfriction_cum_ -= 0.5 * Mp * double(dvp_t.dot(vsum));
+      last_contact_time_ = time_ + model_.dt;
+      had_contact_ = true;
+    }
+    const V3 impulse_on_proj = impulse_normal + impulse_fric;
+    nodes_on_projectile_ = touching;
+    projectile_force_ = double(impulse_on_proj.norm() / dt);
+  }
+
+  // A modelled node that reaches a symmetry plane meets its own mirror image there: it is
+  // stopped at the plane (perfectly inelastic, booked as contact loss), as the full model's
+  // yarn contact would do. Plane nodes themselves are held by their fixed velocity bit.
+  void symmetry_planes() {
+    if (!model_.mirror_x && !model_.mirror_y) return;
+    const Real dt = Real(model_.dt);
+    for (int i = 0; i < model_.node_count; ++i) {
+      for (int ax = 0; ax < 2; ++ax) {
+        if (!(ax == 0 ? model_.mirror_x : model_.mirror_y)) continue;
+        if (x_[i][ax] >= Real(0) || model_.fixed[i] == fix_all) continue;
+        // Velocity change that puts the predicted position back on the plane.
+        const Real dv = -x_[i][ax] / dt;
+        v_[i][ax] += dv;
+        dv_contact_[i][ax] += dv;
+        x_[i][ax] = Real(0);
+      }
+    }
+  }
+
+  double fabric_ke() const {
+    double ke = 0;
+    for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(v_[i].squaredNorm());
+    return ke;
+  }
+
+  void finish_step() {
+    contact_cum_ -= correction_work(dv_contact_);
+    friction_cum_ -= correction_work(dv_friction_);
+    pfriction_cum_ -= correction_work(dv_pfriction_);
+    ke_fabric_half_ = fabric_ke();
+    ke_half_ = ke_fabric_half_ + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
+    time_ += model_.dt;
+    ++steps_;
+  }
+
+  void fail(const std::string& why) {
+    if (divergence_.empty())
+      divergence_ = "diverged at step " + std::to_string(steps_) + " (t = " + fmt(time_ * 1e6) + " us): " + why;
+  }
+  static std::string fmt(double v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.4g", v);
+    return b;
+  }
+
+ private:
+  int threads_ = 1;
+  ZenerConstants zener_{1, 1, 1};
+  double decay_ = 1, slack_decay_ = 1;
+  std::vector<V3> x_, v_, f_, v_prev_;
+  std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_;  // this step's corrections, per mechanism
+  std::vector<Real> strain_, prev_strain_, ev_, stress_;
+  std::vector<std::uint8_t> broken_flag_;
+  std::vector<V3> elem_force_, bend_force_;
+  std::vector<double> elem_energy_, elem_diss_, bend_energy_;
+  std::vector<int> inc_e_off_, inc_b_off_;
+  std::vector<std::pair<int, Real>> inc_e_, inc_b_;
+  std::vector<int> cr_kw_, cr_kf_;
+  std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
+  std::vector<std::uint8_t> cr_active_, cr_sliding_;
+  V3 xp_, vp_;
+  double ke_half_ = 0, ke_fabric_half_ = 0;
+  double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0,
+         released_prev_ = 0;
+  double friction_cum_ = 0, pfriction_cum_ = 0, contact_cum_ = 0;
+  double escape_radius2_ = 1;
+};
+
+}  // namespace
+
+std::unique_ptr<Solver> make_solver(const Model& model, Precision precision, int threads) {
+  if (precision == Precision::single_precision) return std::make_unique<SolverT<float>>(model, threads);
+  return std::make_unique<SolverT<double>>(model, threads);
+}
+
+}  // namespace ravel

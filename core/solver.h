@@ -1,0 +1,125 @@
+// The explicit solver: one time step as a short list of named stages.
+//
+// Why this order (paper §2-4, SPEC §3): Eq 1-2 integrate the free motion first, then the
+// contact algorithms correct the *predicted* state, so that the state at the end of each
+// step is free of interpenetration:
+//
+//   internal_forces     element strain -> Zener/elastic stress, bending springs, failure
+//   close_ledger_row    the ledger at t - dt/2 (needs this step's stored energy, see below)
+//   integrate           v += dt/m sum(f) (Eq 1), x += v dt (Eq 2), projectile free flight
+//   yarn_contact        N passes of nearest-pair tracking, normal correction (Eq 5-11) and
+//                       stick/slip friction (Eq 12-15) on the predicted state
+//   projectile_contact  normal push-out (Eq 18-19) and friction (Eq 20-22)
+//   finish_step         kinetic energy of the half-step velocities, divergence checks
+//
+// Energy timing. Central differences carry velocities at half steps and positions at
+// whole steps. The ledger is therefore evaluated at half steps: kinetic energy from
+// v(t+dt/2) exactly, stored energy and the cumulative dashpot / release terms as the mean
+// of their values at t and t+dt. With that pairing the ledger of an undamped linear
+// network is conserved to O((omega dt)^2) without drift, which is what the energy tests
+// rely on.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ledger.h"
+#include "model.h"
+
+namespace ravel {
+
+// Counts of places where the method's assumptions broke (SPEC §4), with the first one.
+struct ContactDiagnostics {
+  long skipped_nodes = 0;        // a nearest pair moved more than one node in one step
+  long ravelled = 0;             // a yarn slipped off the end of its partner: crossing released
+  long passed_through = 0;       // yarns found passed through each other by more than D
+  long lost_segments = 0;        // both adjoining segments broken: crossing released
+  double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
+  int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
+  double max_penetration = 0;    // deepest yarn-yarn interpenetration left after the step (m)
+};
+
+// Precision-independent view of a solver (the Simulation holds one of two instantiations).
+class Solver {
+ public:
+  virtual ~Solver() = default;
+  const Model& model() const { return model_; }
+
+  virtual void step() = 0;
+  virtual void set_threads(int n) = 0;
+
+  double time() const { return time_; }
+  long steps() const { return steps_; }
+  // Ledger of the modelled part at the latest half step (time() - dt/2).
+  const Ledger& ledger() const { return ledger_; }
+  double ledger_time() const { return time_ - 0.5 * model_.dt; }
+  const ContactDiagnostics& diagnostics() const { return diag_; }
+  bool diverged() const { return !divergence_.empty(); }
+  const std::string& divergence() const { return divergence_; }
+
+  // Projectile state (modelled part; mass is projectile_mass).
+  virtual Vec3d projectile_position() const = 0;
+  virtual Vec3d projectile_velocity() const = 0;
+  // Node state in double.
+  virtual Vec3d position(int node) const = 0;
+  virtual Vec3d velocity(int node) const = 0;
+  virtual void set_velocity(int node, const Vec3d& v) = 0;
+  virtual void set_position(int node, const Vec3d& x) = 0;
+  virtual void set_projectile_velocity(const Vec3d& v) = 0;
+  virtual void set_projectile_position(const Vec3d& x) = 0;
+  // Element state.
+  virtual double strain(int e) const = 0;
+  virtual double stress(int e) const = 0;
+  virtual bool broken(int e) const = 0;
+  // Crossing state.
+  virtual bool crossing_active(int c) const = 0;
+  virtual bool crossing_sliding(int c) const = 0;
+  virtual double crossing_normal_force(int c) const = 0;   // N (Eq 11), last step
+  virtual double crossing_friction_force(int c) const = 0; // N, magnitude of the resultant, last step
+  virtual double crossing_slip_rate(int c) const = 0;      // m/s
+  virtual double crossing_gap(int c) const = 0;            // |d| - D after the step (m), <0: penetration
+  virtual int crossing_warp_node(int c) const = 0;         // tracked nearest node along the warp yarn
+  virtual int crossing_weft_node(int c) const = 0;
+
+  // Per step scalars.
+  int nodes_on_projectile() const { return nodes_on_projectile_; }
+  double projectile_contact_force() const { return projectile_force_; }   // N, modelled part
+  double yarn_contact_force() const { return yarn_force_; }               // N, modelled part
+  double max_strain() const { return max_strain_; }
+  int sliding_crossings() const { return sliding_count_; }
+  int stuck_crossings() const { return stuck_count_; }
+  int broken_count(int family) const { return broken_[family]; }
+  std::uint64_t state_hash() const;
+
+  // Projectile contact history, for perforation detection.
+  bool had_contact() const { return had_contact_; }
+  double last_contact_time() const { return last_contact_time_; }
+  // Ledger total above this x the initial energy -> diverged.
+  void set_divergence_factor(double f) { divergence_factor_ = f; }
+
+ protected:
+  explicit Solver(Model m) : model_(std::move(m)) {}
+  virtual void hash_into(std::uint64_t& h) const = 0;
+
+  Model model_;
+  double time_ = 0;
+  long steps_ = 0;
+  Ledger ledger_;
+  ContactDiagnostics diag_;
+  std::string divergence_;
+  int nodes_on_projectile_ = 0;
+  double projectile_force_ = 0, yarn_force_ = 0, max_strain_ = 0;
+  int sliding_count_ = 0, stuck_count_ = 0;
+  int broken_[2] = {0, 0};
+  bool had_contact_ = false;
+  double last_contact_time_ = -1;
+  double divergence_factor_ = 1.5;
+};
+
+// Make the solver for a model in the scene's precision.
+std::unique_ptr<Solver> make_solver(const Model& model, Precision precision, int threads);
+
+}  // namespace ravel
