@@ -277,6 +277,7 @@ struct Renderer::Impl {
   int colormap_loaded = -1;
   Mesh sphere, cylinder, cone, box;
   std::vector<TubeInstance> instances;
+  std::vector<std::uint8_t> intact;
   OverlayBatch overlay;
   DrawStats stats;
 
@@ -509,6 +510,14 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     const float inv_range = 1.0f / (hi - lo);
     const float max_stub = 0.5f * spacing;
 
+    // Intact elements per node: a broken element leaves a frayed stub only on a node
+    // still held by its yarn; nodes whose elements all broke are loose fibre, not drawn.
+    r.intact.assign(frame.node_pos.size(), 0);
+    for (std::size_t e = 0; e < n_elem; ++e) {
+      if (e < frame.elem_broken.size() && frame.elem_broken[e]) continue;
+      if (frame.elem_a[e] < r.intact.size()) r.intact[frame.elem_a[e]] = 1;
+      if (frame.elem_b[e] < r.intact.size()) r.intact[frame.elem_b[e]] = 1;
+    }
     r.instances.clear();
     r.instances.reserve(n_elem + 64);
     for (std::size_t e = 0; e < n_elem; ++e) {
@@ -532,8 +541,8 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       if (len <= 0) continue;
       const Vec3 s = d * (std::min(0.3f * len, max_stub) / len);
       const Vec3 ea = pa + s, eb = pb - s;
-      r.instances.push_back({pa[0], pa[1], pa[2], t, ea[0], ea[1], ea[2], 2.0f});
-      r.instances.push_back({pb[0], pb[1], pb[2], t, eb[0], eb[1], eb[2], 2.0f});
+      if (r.intact[ia]) r.instances.push_back({pa[0], pa[1], pa[2], t, ea[0], ea[1], ea[2], 2.0f});
+      if (r.intact[ib]) r.instances.push_back({pb[0], pb[1], pb[2], t, eb[0], eb[1], eb[2], 2.0f});
     }
 
     const int sides = std::clamp(o.tube_sides, 4, 16);
