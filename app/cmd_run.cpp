@@ -11,6 +11,9 @@
 #include "commands.h"
 #include "results.h"
 #include "simulation.h"
+#ifdef RAVEL_HAVE_SNAPSHOT
+#include "render/frame_recorder.h"  // --frames / --vtk (render/ owner)
+#endif
 
 namespace ravel::app {
 
@@ -44,15 +47,39 @@ void print_summary_line(const Summary& s, const std::string& out_dir) {
 
 int cmd_run(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"frames"}, {"quiet", "vtk"});
+    CommonArgs a = parse_args(args, {"frames", "view", "field"}, {"quiet", "vtk"});
     if (a.out_dir.empty()) throw UsageError("run needs --out DIR");
+#ifdef RAVEL_HAVE_SNAPSHOT
+    render::RecorderOptions rec;
+    std::string rec_error;
+    if (a.flags.count("frames") && !render::parse_frames_spec(a.flags["frames"], &rec, &rec_error))
+      throw UsageError(rec_error);
+    if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &rec.view.view))
+      throw UsageError("--view: expected oblique, top, back or section");
+    if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &rec.view.field))
+      throw UsageError("--field: expected strain, velocity or sliding");
+    rec.png = rec.mode != render::RecorderOptions::Mode::none;
+    rec.vtk = has_switch(a, "vtk");
+    rec.dir = a.out_dir;
+#else
+    if (a.flags.count("frames") || has_switch(a, "vtk"))
+      throw UsageError("--frames / --vtk need a build with the renderer (RAVEL_BUILD_GUI=ON)");
+#endif
     Scene scene = load_scene_from(a);
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     Simulation sim(scene);
+#ifdef RAVEL_HAVE_SNAPSHOT
+    auto recorder = render::FrameRecorder::create(rec, &rec_error);
+    if (!recorder) throw OutputError(rec_error);
+    bool rec_ok = recorder->on_sample(sim, &rec_error);  // the initial state
+#endif
     const bool progress = scene.output.progress && !has_switch(a, "quiet") && isatty(fileno(stderr));
     auto last = std::chrono::steady_clock::now();
     sim.run(&g_interrupt, [&](const Simulation& s) {
+#ifdef RAVEL_HAVE_SNAPSHOT
+      if (rec_ok) rec_ok = recorder->on_sample(s, &rec_error);
+#endif
       if (!progress) return;
       auto now = std::chrono::steady_clock::now();
       if (now - last < std::chrono::milliseconds(200)) return;
@@ -63,6 +90,14 @@ int cmd_run(const Args& args) {
     });
     if (progress) std::fprintf(stderr, "\r%*s\r", 80, "");
     write_run_outputs(a.out_dir, sim);
+#ifdef RAVEL_HAVE_SNAPSHOT
+    if (rec_ok) rec_ok = recorder->finish(sim, &rec_error);
+    if (!rec_ok) throw OutputError(rec_error);
+    if (recorder->images_written() && !has_switch(a, "quiet"))
+      std::printf("  %d images in %s/frames/\n", recorder->images_written(), a.out_dir.c_str());
+    if (recorder->vtk_written() && !has_switch(a, "quiet"))
+      std::printf("  %d VTU frames in %s/vtk/frame.pvd\n", recorder->vtk_written(), a.out_dir.c_str());
+#endif
     const Summary s = sim.summary();
     print_summary_line(s, a.out_dir);
     if (s.status == RunStatus::diverged) return exit_diverged;
