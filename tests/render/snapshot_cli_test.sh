@@ -27,4 +27,12 @@ ls "$out" | grep -q '\.tmp\.' && fail "temporary file left behind"
 [ $rc -eq 2 ] || fail "tiny --size should exit 2, got $rc"
 "$ravel" snapshot --out "$out" 2>/dev/null; rc=$?
 [ $rc -eq 2 ] || fail "missing --at should exit 2, got $rc"
+# `ravel run --frames final --vtk`: the initial and final states as PNG and VTU.
+run_out="$out/run"
+"$ravel" run --set solver.end_time_us=2 --frames final --vtk --out "$run_out" --quiet >/dev/null ||
+  fail "run --frames exited $?"
+[ -f "$run_out/frames/frame_00000.png" ] || fail "run --frames final wrote no PNG"
+grep -q 'file="frame_00000.vtu"' "$run_out/vtk/frame.pvd" || fail "run --vtk wrote no series"
+"$ravel" run --frames every=0 --out "$run_out" 2>/dev/null; rc=$?
+[ $rc -eq 2 ] || fail "--frames every=0 should exit 2, got $rc"
 echo "snapshot cli: ok"
