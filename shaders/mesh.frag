@@ -12,7 +12,7 @@ void main() {
   vec3 n = normalize(v_normal);
   vec3 v = normalize(u_eye - v_world);
   if (!gl_FrontFacing) {  // inside of a cut solid
-    o_color = vec4(u_color * 0.25, 1.0);
+    o_color = vec4(u_color * 0.6 + vec3(0.04), 1.0);
     return;
   }
   float key = max(dot(n, u_key_dir), 0.0);
