@@ -58,7 +58,7 @@ inline double zener_stored(const ZenerConstants& c, double stress, double ev) {
 // Eq 24: stress at strain eps under a constant strain rate from rest.
 inline double zener_constant_rate_stress(const ZenerConstants& c, double eps, double rate) {
   const double s = c.k1 + c.k2;
-  return c.k1 * c.k2 / s * eps - c.k1 * c.k1 * c.mu / (s * s) * rate * (std::exp(-s / c.mu * eps / rate) - 1.0);
+  return c.k1 * c.k2 / s * eps - c.k1 * c.k1 * c.mu / (s * s) * rate * std::expm1(-s / c.mu * eps / rate);
 }
 
 }  // namespace ravel

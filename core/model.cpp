@@ -180,6 +180,7 @@ Model build_model(const Scene& scene) {
   // slack by the crimp and straighten before they carry load (crimp interchange, ref [8]).
   const double crimped = single ? L0 : std::sqrt(L0 * L0 + L1 * L1);
   m.yarn_end_free.resize(m.yarn_count());
+  m.yarn_start_mirror.assign(m.yarn_count(), -1);
   for (int yy = 0; yy < m.yarn_count(); ++yy) {
     m.yarn_elem_offset.push_back(int(m.elem_a.size()));
     const bool is_warp = m.yarn_family[yy] == warp;
@@ -204,6 +205,19 @@ Model build_model(const Scene& scene) {
       const Vec3d m1 = 0.5 * (m.x0[m.yarn_node(yy, kk)] + m.x0[m.yarn_node(yy, kk + 1)]);
       const Vec3d m2 = 0.5 * (m.x0[m.yarn_node(yy, kk + 1)] + m.x0[m.yarn_node(yy, kk + 2)]);
       m.bend_rest.push_back((m2 - m1).norm());
+      m.bend_mirror.push_back(-1);
+    }
+    // A yarn that crosses a symmetry plane at its first node has, in the full fabric, a
+    // bending spring between its first element and that element's mirror image.
+    const int ax = (!is_warp && can_x) ? 0 : (is_warp && can_y) ? 1 : -1;
+    m.yarn_start_mirror[yy] = std::int8_t(ax);
+    if (ax >= 0 && n >= 2) {
+      const Vec3d mid = 0.5 * (m.x0[m.yarn_node(yy, 0)] + m.x0[m.yarn_node(yy, 1)]);
+      m.bend_e1.push_back(e0);
+      m.bend_e2.push_back(e0);
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / crimped);
+      m.bend_rest.push_back(2 * std::abs(mid[ax]));
+      m.bend_mirror.push_back(ax);
     }
     // Free ends: the first node is free unless clamped or on a symmetry plane.
     const int first = m.yarn_node(yy, 0), last = m.yarn_node(yy, n - 1);
@@ -227,6 +241,12 @@ Model build_model(const Scene& scene) {
         c.grid_j = g.j_min + fj;
         c.warp_node = fj;  // warp yarn wi has a node at every J
         c.weft_node = wi;
+        // Inside a clamp both yarns are held: no contact to resolve there. (Keeping such
+        // crossings lets a correction at a clamped node act through a tiny lever on its
+        // free neighbour, which is numerically unstable.)
+        if (m.fixed[m.yarn_node(c.warp_yarn, c.warp_node)] == fix_all ||
+            m.fixed[m.yarn_node(c.weft_yarn, c.weft_node)] == fix_all)
+          continue;
         const bool warp_top = ((c.grid_i + c.grid_j) % 2 + 2) % 2 == 0;
         // t_warp x t_weft ~ y x x = -z; n must point from warp to weft: -z when the warp is on top.
         c.side = warp_top ? 1.0 : -1.0;

@@ -58,6 +58,7 @@ struct Model {
   std::vector<int> yarn_grid;           // global index I (warp) or J (weft)
   std::vector<int> yarn_elem_offset;    // element k of yarn y is yarn_elem_offset[y] + k
   std::vector<std::uint8_t> yarn_end_free;  // bit 0: first node is a free end, bit 1: last node
+  std::vector<std::int8_t> yarn_start_mirror;  // first node on the mirror plane x = 0 (0) / y = 0 (1) the yarn crosses; -1 none
 
   int yarn_count() const { return int(yarn_family.size()); }
   int yarn_size(int y) const { return yarn_offset[y + 1] - yarn_offset[y]; }
@@ -70,8 +71,10 @@ struct Model {
   std::vector<double> elem_area;        // m^2 (half for a yarn on a symmetry plane, x k when lumped)
   std::vector<double> elem_stiffness;   // instantaneous axial stiffness E_inst A / L, N/m
 
-  // --- bending: compression-only springs between midpoints of adjoining elements
-  std::vector<int> bend_e1, bend_e2;
+  // --- bending: compression-only springs between midpoints of adjoining elements.
+  // bend_mirror >= 0 marks the spring that, in the full fabric, joins a yarn's first
+  // modelled element to its mirror image across plane x = 0 (0) or y = 0 (1); e2 == e1.
+  std::vector<int> bend_e1, bend_e2, bend_mirror;
   std::vector<double> bend_k, bend_rest;
 
   // --- yarn-yarn crossings (sliding model only)

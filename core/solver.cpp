@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 
 #include "geometry.h"
@@ -77,6 +78,7 @@ class SolverT final : public Solver {
     cr_slip_.assign(nc, 0.0);
     cr_gap_.assign(nc, 0.0);
     cr_sliding_.assign(nc, 0);
+    cr_event_.assign(nc, 0);
     cr_fn_step_.assign(nc, 0.0);
     for (int c = 0; c < nc; ++c) {
       cr_kw_[c] = model_.crossings[c].warp_node;
@@ -111,7 +113,6 @@ class SolverT final : public Solver {
     integrate();         // Eq 1-2
     if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
     projectile_contact();                           // Eq 18-22
-    symmetry_planes();                              // mirror images do not interpenetrate
     finish_step();
   }
 
@@ -164,6 +165,12 @@ class SolverT final : public Solver {
     for (size_t s = 0; s < model_.bend_k.size(); ++s) {
       // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
       const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+      if (model_.bend_mirror[s] >= 0) {
+        // Mirror spring: bend_force_ is the force on this element's midpoint.
+        nb[model_.elem_a[e1]].push_back({int(s), Real(0.5)});
+        nb[model_.elem_b[e1]].push_back({int(s), Real(0.5)});
+        continue;
+      }
       nb[model_.elem_a[e1]].push_back({int(s), Real(-0.5)});
       nb[model_.elem_b[e1]].push_back({int(s), Real(-0.5)});
       nb[model_.elem_a[e2]].push_back({int(s), Real(0.5)});
@@ -247,6 +254,19 @@ class SolverT final : public Solver {
       const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
       if (broken_flag_[e1] || broken_flag_[e2]) {
         bend_force_[s].setZero();
+        continue;
+      }
+      const int ax = model_.bend_mirror[s];
+      if (ax >= 0) {
+        // Against the mirror image: midpoint distance 2 |M_ax|; pushes M away from the
+        // plane. Half of the spring's energy belongs to this side of the plane.
+        const Real mc = Real(0.5) * (x_[model_.elem_a[e1]][ax] + x_[model_.elem_b[e1]][ax]);
+        const double comp = model_.bend_rest[s] - 2 * std::abs(double(mc));
+        bend_force_[s].setZero();
+        if (comp > 0) {
+          bend_stored += 0.25 * model_.bend_k[s] * comp * comp;
+          bend_force_[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
+        }
         continue;
       }
       const V3 m1 = Real(0.5) * (x_[model_.elem_a[e1]] + x_[model_.elem_b[e1]]);
@@ -377,27 +397,6 @@ class SolverT final : public Solver {
     }
   }
 
-  // Apply impulse P to the weft point and -P to the warp point, with closest-point
-  // weights; the velocity change is recorded against its mechanism (`acc`) for the ledger.
-  void apply_pair_impulse(int n0, int n1, Real a, int q0, int q1, Real b, const V3& P, std::vector<V3>& acc) {
-    int ids[4] = {n0, n1, q0, q1};
-    Real w[4] = {-(Real(1) - a), -a, Real(1) - b, b};
-    const Real dt = Real(model_.dt);
-    for (int k = 0; k < 4; ++k) {
-      const int i = ids[k];
-      const Real im = Real(model_.inv_mass[i]);
-      if (im == Real(0) || w[k] == Real(0)) continue;
-      V3 dv = (w[k] * im) * P;
-      const std::uint8_t fx = model_.fixed[i];
-      if (fx & fix_x) dv.x() = 0;
-      if (fx & fix_y) dv.y() = 0;
-      if (fx & fix_z) dv.z() = 0;
-      v_[i] += dv;
-      acc[i] += dv;
-      x_[i] += dt * dv;  // the predicted position follows the velocity change (Eq 2)
-    }
-  }
-
   // Work of a correction in the leapfrog's own energy statement. With v- = v(t-dt/2) and
   // v+ = v(t+dt/2) after all corrections, KE(v+) - KE(v-) = sum over forces F of
   // F . (dx(t-dt/2) + dx(t+dt/2)) / 2 exactly; a correction dv is a force m dv/dt, so its
@@ -415,9 +414,11 @@ class SolverT final : public Solver {
   // Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
   // edge of the window is searched once more; moving again means the yarns slid more than
   // one node in one step, which the method assumes never happens: reported, not hidden.
-  void track(int c) {
+  // Returns true in that case.
+  bool track(int c) {
     const Crossing& cr = model_.crossings[c];
     const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+    bool skipped = false;
     for (int round = 0; round < 4; ++round) {
       int bw = cr_kw_[c], bf = cr_kf_[c];
       Real best = (x_[ynode(cr.weft_yarn, bf)] - x_[ynode(cr.warp_yarn, bw)]).squaredNorm();
@@ -431,42 +432,46 @@ class SolverT final : public Solver {
           if (d2 < best) best = d2, bw = kw, bf = kf;
         }
       }
-      if (bw == cr_kw_[c] && bf == cr_kf_[c]) return;
+      if (bw == cr_kw_[c] && bf == cr_kf_[c]) break;
       cr_kw_[c] = bw;
       cr_kf_[c] = bf;
-      if (round == 1) {
-        if (diag_.skipped_nodes++ == 0) {
-          diag_.first_skip_time = time_;
-          diag_.first_skip_i = cr.grid_i;
-          diag_.first_skip_j = cr.grid_j;
-        }
-      }
+      if (round >= 1) skipped = true;
     }
+    return skipped;
   }
 
-  void release(int c, long& counter, double& first_t, int& fi, int& fj) {
+  void release(int c, std::uint8_t why) {
     cr_active_[c] = 0;
     cr_fn_[c] = cr_ft_[c] = cr_slip_[c] = 0;
     cr_sliding_[c] = 0;
-    if (counter++ == 0) {
-      first_t = time_;
-      fi = model_.crossings[c].grid_i;
-      fj = model_.crossings[c].grid_j;
-    }
+    cr_event_[c] |= why;
   }
 
+  // The contact between two crossing yarns: closest points of the 2 x 2 adjoining
+  // segment pairs (Eq 5-8). The zig-zag's kinks make pairs tie for the smallest |d| (at rest
+  // all four do); pairs within kTieBand * D of the closest share the contact, so the
+  // correction is continuous in the state and a mirror-symmetric state gets a
+  // mirror-symmetric correction (see docs/MODEL.md).
+  static constexpr double kTieBand = 0.02;
   struct ContactGeom {
     bool ok = false;
-    int sw = 0, sf = 0;
+    int sw = 0, sf = 0;        // the first closest pair (for the end-of-yarn tests)
     Real a = 0, b = 0;
-    V3 d;
-    Real dist = 0;
+    V3 d = V3::Zero();         // contact vector warp -> weft (mean over tied pairs)
+    Real dist = 0;             // smallest |d|
+    Real ww[3] = {0, 0, 0};    // weights on warp nodes kw-1, kw, kw+1
+    Real wf[3] = {0, 0, 0};    // weights on weft nodes kf-1, kf, kf+1
   };
 
-  // Closest points between the adjoining segments of the two yarns (2 x 2 combinations).
   ContactGeom closest(int c) const {
     const Crossing& cr = model_.crossings[c];
     ContactGeom g;
+    struct Cand {
+      int sw, sf;
+      Real a, b, dist;
+      V3 d;
+    } cand[4];
+    int nc = 0;
     Real best = Real(1e30);
     for (int sw = cr_kw_[c] - 1; sw <= cr_kw_[c]; ++sw) {
       if (!seg_ok(cr.warp_yarn, sw)) continue;
@@ -477,19 +482,38 @@ class SolverT final : public Solver {
         closest_points_segments(x_[ynode(cr.warp_yarn, sw)], x_[ynode(cr.warp_yarn, sw + 1)],
                                 x_[ynode(cr.weft_yarn, sf)], x_[ynode(cr.weft_yarn, sf + 1)], a, b, pa, pb);
         const V3 d = pb - pa;
-        const Real dist = d.norm();
-        if (dist < best) {
-          best = dist;
-          g.ok = true;
-          g.sw = sw;
-          g.sf = sf;
-          g.a = a;
-          g.b = b;
-          g.d = d;
-          g.dist = dist;
-        }
+        cand[nc] = {sw, sf, a, b, d.norm(), d};
+        best = std::min(best, cand[nc].dist);
+        ++nc;
       }
     }
+    if (nc == 0) return g;
+    // Pairs within kTieBand * D of the closest share the contact, with weights falling
+    // linearly from 1 (closest) to 0 (band edge): the contact point moves continuously
+    // when two pairs swap places.
+    const Real band = Real(kTieBand) * Real(cr.contact_distance);
+    Real wsum = 0;
+    for (int k = 0; k < nc; ++k) {
+      const Cand& q = cand[k];
+      if (q.dist == best && wsum == Real(0)) g.sw = q.sw, g.sf = q.sf, g.a = q.a, g.b = q.b, wsum = Real(1e-30);
+    }
+    wsum = 0;
+    for (int k = 0; k < nc; ++k) {
+      const Cand& q = cand[k];
+      const Real wq = Real(1) - (q.dist - best) / band;
+      if (wq <= Real(0)) continue;
+      wsum += wq;
+      g.d += wq * q.d;
+      g.ww[q.sw - (cr_kw_[c] - 1)] += wq * (Real(1) - q.a);
+      g.ww[q.sw - (cr_kw_[c] - 1) + 1] += wq * q.a;
+      g.wf[q.sf - (cr_kf_[c] - 1)] += wq * (Real(1) - q.b);
+      g.wf[q.sf - (cr_kf_[c] - 1) + 1] += wq * q.b;
+    }
+    const Real inv = Real(1) / wsum;
+    g.d *= inv;
+    for (int k = 0; k < 3; ++k) g.ww[k] *= inv, g.wf[k] *= inv;
+    g.dist = best;
+    g.ok = true;
     return g;
   }
 
@@ -515,15 +539,26 @@ class SolverT final : public Solver {
   double chord_coord(int yarn, int k, const V3& p, V3& tangent) const {
     const int km = seg_ok(yarn, k - 1) ? k - 1 : k;
     const int kp = seg_ok(yarn, k) ? k + 1 : k;
-    const V3 T = x_[ynode(yarn, kp)] - x_[ynode(yarn, km)];
+    V3 xm = x_[ynode(yarn, km)];
+    int span = kp - km;
+    const int ax = model_.yarn_start_mirror[yarn];
+    if (k == 0 && ax >= 0 && kp == 1) {
+      // Node 0 sits on a symmetry plane: its other neighbour is node 1's mirror image, and
+      // contacts on the mirror side belong to the mirror crossing (offset clamped to >= 0).
+      xm = x_[ynode(yarn, 1)];
+      xm[ax] = -xm[ax];
+      span = 2;
+    }
+    const V3 T = x_[ynode(yarn, kp)] - xm;
     const Real T2 = T.squaredNorm();
-    if (kp == km || T2 <= Real(0)) {
+    if (span == 0 || T2 <= Real(0)) {
       tangent.setZero();
       return k;
     }
     tangent = T / std::sqrt(T2);
-    const double off = double((p - x_[ynode(yarn, k)]).dot(T) / T2) * double(kp - km);
-    return k + std::clamp(off, double(km - k), double(kp - k));
+    const double off = double((p - x_[ynode(yarn, k)]).dot(T) / T2) * double(span);
+    const double lo = (k == 0 && ax >= 0) ? 0.0 : double(km - k);
+    return k + std::clamp(off, lo, double(kp - k));
   }
   // The two nodes and fraction of a material coordinate.
   void coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
@@ -533,127 +568,59 @@ class SolverT final : public Solver {
     n1 = ynode(yarn, s + 1);
   }
 
+  // One crossing's corrections for one pass, computed from the same state for every
+  // crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
+  // on the order crossings are visited in, nor on the number of threads.
+  struct CrossingImpulse {
+    int node[6];      // warp kw-1..kw+1, weft kf-1..kf+1 (-1: none)
+    Real w[6];        // signed weights: -warp, +weft
+    V3 P;             // normal impulse on the weft contact point (Eq 9-11)
+    int fnode[4];     // friction: warp pair, weft pair
+    Real fw[4];
+    V3 F;             // friction impulse on the weft contact point (Eq 15)
+    bool has_n, has_f;
+  };
+
   void yarn_contact() {
     const int nc = int(model_.crossings.size());
     const int N = model_.contact_iterations;
     const Real dt = Real(model_.dt);
     std::fill(cr_fn_step_.begin(), cr_fn_step_.end(), 0.0);
     std::fill(cr_ft_.begin(), cr_ft_.end(), 0.0);
+    std::fill(cr_event_.begin(), cr_event_.end(), 0);
+    impulses_.resize(nc);
     for (int pass = 1; pass <= N; ++pass) {
       // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
       const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
       const bool last = pass == N;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
+      for (int c = 0; c < nc; ++c) crossing_pass(c, alpha, last);
+      // Apply, in crossing order.
       for (int c = 0; c < nc; ++c) {
-        if (!cr_active_[c]) continue;
-        const Crossing& cr = model_.crossings[c];
-        track(c);
-        ContactGeom g = closest(c);
-        if (!g.ok) {
-          release(c, diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
-          continue;
-        }
-        const int w0 = ynode(cr.warp_yarn, g.sw), w1 = ynode(cr.warp_yarn, g.sw + 1);
-        const int f0 = ynode(cr.weft_yarn, g.sf), f1 = ynode(cr.weft_yarn, g.sf + 1);
-        const V3 tw = x_[w1] - x_[w0], tf = x_[f1] - x_[f0];
-        // Ravelled out: the partner has slipped off a free end.
-        if (slipped_off(cr.warp_yarn, g.sw, g.a, g.d) || slipped_off(cr.weft_yarn, g.sf, g.b, V3(-g.d))) {
-          release(c, diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
-          continue;
-        }
-        // Side test: n from the weave (fixed sign) and the current segment directions.
-        V3 n = tw.cross(tf);
-        const Real nn = n.norm();
-        if (nn > Real(1e-20)) n *= Real(cr.side) / nn;
-        else n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
-        const Real D = Real(cr.contact_distance);
-        const Real s = g.d.dot(n);
-        Real delta;
-        V3 u;
-        if (s >= Real(0)) {
-          delta = D - g.dist;
-          u = g.dist > Real(1e-12) * D ? V3(g.d / g.dist) : n;
-        } else {
-          if (g.dist > D) {
-            // Passed through by more than a yarn diameter: the correction would be a jump
-            // of more than 2D in one step; the nearest-pair assumption is broken here.
-            release(c, diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
-            continue;
-          }
-          delta = D + g.dist;
-          u = g.dist > Real(1e-12) * D ? V3(-g.d / g.dist) : n;
-        }
-        // Effective inverse mass of the relative motion of the two contact points.
-        const Real a = g.a, b = g.b;
-        const Real winv = (Real(1) - a) * (Real(1) - a) * Real(model_.inv_mass[w0]) + a * a * Real(model_.inv_mass[w1]) +
-                          (Real(1) - b) * (Real(1) - b) * Real(model_.inv_mass[f0]) + b * b * Real(model_.inv_mass[f1]);
-        if (winv <= Real(0)) continue;  // all four nodes clamped
-        if (delta > Real(0)) {
-          // Eq 9-10 (with node masses): a relative displacement alpha*delta within the step.
-          const Real P = alpha * delta / (dt * winv);
-          apply_pair_impulse(w0, w1, a, f0, f1, b, V3(P * u), dv_contact_);
-          cr_fn_step_[c] += double(P / dt);  // Eq 11
-        }
-        if (last) cr_gap_[c] = double(g.dist - D);
-        // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
-        // material coordinate on each yarn is the partner's contact point projected on this
-        // yarn's chord through its tracked node: continuous in time, unlike the raw closest
-        // point, which jumps between the four equivalent segment pairs of the zig-zag.
-        const V3 pa = (Real(1) - a) * x_[w0] + a * x_[w1];
-        const V3 pb = (Real(1) - b) * x_[f0] + b * x_[f1];
-        V3 Tw, Tf;
-        const double cw = chord_coord(cr.warp_yarn, cr_kw_[c], pb, Tw);
-        const double cf = chord_coord(cr.weft_yarn, cr_kf_[c], pa, Tf);
-        if (cr_stick_w_[c] < 0) cr_stick_w_[c] = cw, cr_stick_f_[c] = cf;
-        int fw0, fw1, ff0, ff1;
-        Real fa, fb;
-        coord_nodes(cr.warp_yarn, cw, fw0, fw1, fa);
-        coord_nodes(cr.weft_yarn, cf, ff0, ff1, fb);
-        const double fwinv = double((Real(1) - fa) * (Real(1) - fa) * Real(model_.inv_mass[fw0]) +
-                                    fa * fa * Real(model_.inv_mass[fw1]) +
-                                    (Real(1) - fb) * (Real(1) - fb) * Real(model_.inv_mass[ff0]) +
-                                    fb * fb * Real(model_.inv_mass[ff1]));
-        const double fn = cr_fn_step_[c];
-        const double limit = model_.friction * fn;
-        double ft_w = 0, ft_f = 0;
-        bool slid = false;
-        double moved = 0;
-        if (fwinv > 0) {
-          // K = alpha_f m / dt^2 with m the effective mass of the relative motion: alpha_f = 1
-          // returns the contact to its stuck point in exactly one step.
-          const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
-          auto one_yarn = [&](int yarn, double cur, double& stick, double& force) {
-            const double slip = double(arc_between(yarn, stick, cur));  // Delta s of Eq 12
-            const double trial = K * slip;
-            if (std::abs(trial) <= limit) {
-              force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
-            } else {
-              force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
-              const double new_stick = advance(yarn, cur, -force / K);
-              moved += std::abs(double(arc_between(yarn, stick, new_stick)));
-              stick = new_stick;
-              slid = true;
-            }
-          };
-          one_yarn(cr.warp_yarn, cw, cr_stick_w_[c], ft_w);
-          one_yarn(cr.weft_yarn, cf, cr_stick_f_[c], ft_f);
-        }
-        if (ft_w != 0 || ft_f != 0) {
-          // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
-          const V3 Fwarp = Real(ft_w) * Tw - Real(ft_f) * Tf;
-          // apply_pair_impulse gives +P to the weft, -P to the warp.
-          apply_pair_impulse(fw0, fw1, fa, ff0, ff1, fb, V3(-alpha * dt * Fwarp), dv_friction_);
-          cr_ft_[c] = double(Fwarp.norm());
-        }
-        if (last) {
-          cr_sliding_[c] = slid;
-          cr_slip_[c] = moved / double(dt);
-          cr_fn_[c] = fn;
-        }
+        const CrossingImpulse& r = impulses_[c];
+        if (r.has_n)
+          for (int k = 0; k < 6; ++k)
+            if (r.node[k] >= 0 && r.w[k] != Real(0)) apply_impulse(r.node[k], r.w[k] * r.P, dv_contact_);
+        if (r.has_f)
+          for (int k = 0; k < 4; ++k)
+            if (r.fw[k] != Real(0)) apply_impulse(r.fnode[k], r.fw[k] * r.F, dv_friction_);
       }
     }
-    double fsum = 0;
+    // Book what broke the method's assumptions, in crossing order.
+    for (int c = 0; c < nc; ++c) {
+      const std::uint8_t ev = cr_event_[c];
+      if (!ev) continue;
+      const Crossing& cr = model_.crossings[c];
+      auto note = [&](long& count, double& t, int& i, int& j) {
+        if (count++ == 0) t = time_, i = cr.grid_i, j = cr.grid_j;
+      };
+      if (ev & ev_skip) note(diag_.skipped_nodes, diag_.first_skip_time, diag_.first_skip_i, diag_.first_skip_j);
+      if (ev & ev_ravel) note(diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+      if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+      if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
+    }
+    double fsum = 0, maxpen = 0;
     int sliding = 0, stuck = 0;
-    double maxpen = 0;
     for (int c = 0; c < nc; ++c) {
       if (!cr_active_[c]) continue;
       fsum += cr_fn_[c];
@@ -664,6 +631,150 @@ class SolverT final : public Solver {
     sliding_count_ = sliding;
     stuck_count_ = stuck;
     diag_.max_penetration = std::max(diag_.max_penetration, maxpen);
+  }
+
+  void apply_impulse(int i, const V3& P, std::vector<V3>& acc) {
+    const Real im = Real(model_.inv_mass[i]);
+    if (im == Real(0)) return;
+    V3 dv = im * P;
+    const std::uint8_t fx = model_.fixed[i];
+    if (fx & fix_x) dv.x() = 0;
+    if (fx & fix_y) dv.y() = 0;
+    if (fx & fix_z) dv.z() = 0;
+    v_[i] += dv;
+    acc[i] += dv;
+    x_[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
+  }
+
+  // Tracking, normal correction and friction of one crossing in one pass.
+  void crossing_pass(int c, Real alpha, bool last) {
+    CrossingImpulse& r = impulses_[c];
+    r.has_n = r.has_f = false;
+    if (!cr_active_[c]) return;
+    const Crossing& cr = model_.crossings[c];
+    const Real dt = Real(model_.dt);
+    if (track(c)) cr_event_[c] |= ev_skip;
+    const ContactGeom g = closest(c);
+    if (!g.ok) {
+      release(c, ev_lost);  // both adjoining segments of a yarn are broken
+      return;
+    }
+    // Ravelled out: the partner has slipped off a free (or broken) end.
+    if (slipped_off(cr.warp_yarn, g.sw, g.a, g.d) || slipped_off(cr.weft_yarn, g.sf, g.b, V3(-g.d))) {
+      release(c, ev_ravel);
+      return;
+    }
+    const int kw = cr_kw_[c], kf = cr_kf_[c];
+    for (int k = 0; k < 3; ++k) {
+      const int iw = kw - 1 + k, jf = kf - 1 + k;
+      r.node[k] = (iw >= 0 && iw < model_.yarn_size(cr.warp_yarn)) ? ynode(cr.warp_yarn, iw) : -1;
+      r.node[3 + k] = (jf >= 0 && jf < model_.yarn_size(cr.weft_yarn)) ? ynode(cr.weft_yarn, jf) : -1;
+      r.w[k] = -g.ww[k];
+      r.w[3 + k] = g.wf[k];
+    }
+    // Side test: n from the weave's fixed sign and the current segment directions.
+    const V3 tw = x_[ynode(cr.warp_yarn, g.sw + 1)] - x_[ynode(cr.warp_yarn, g.sw)];
+    const V3 tf = x_[ynode(cr.weft_yarn, g.sf + 1)] - x_[ynode(cr.weft_yarn, g.sf)];
+    V3 n = tw.cross(tf);
+    const Real nn = n.norm();
+    if (nn > Real(1e-20)) n *= Real(cr.side) / nn;
+    else n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+    const Real D = Real(cr.contact_distance);
+    const Real dlen = g.d.norm();
+    Real delta;
+    V3 u;
+    if (g.d.dot(n) >= Real(0)) {
+      delta = D - g.dist;
+      u = dlen > Real(1e-12) * D ? V3(g.d / dlen) : n;
+    } else {
+      if (g.dist > D) {
+        // Passed through by more than a yarn diameter: a correction of more than 2D in one
+        // step; the nearest-pair assumption is broken here.
+        release(c, ev_pass);
+        return;
+      }
+      delta = D + g.dist;
+      u = dlen > Real(1e-12) * D ? V3(-g.d / dlen) : n;
+    }
+    // A crossing on a symmetry plane is its own mirror image: its mirror contact pair ties
+    // with this one, and the pair's mean direction has no component across the plane.
+    if ((model_.mirror_x && cr.grid_i == 0) || (model_.mirror_y && cr.grid_j == 0)) {
+      if (model_.mirror_x && cr.grid_i == 0) u.x() = 0;
+      if (model_.mirror_y && cr.grid_j == 0) u.y() = 0;
+      const Real un = u.norm();
+      u = un > Real(0) ? V3(u / un) : n;
+    }
+    // Effective inverse mass of the relative motion of the two contact points.
+    Real winv = 0;
+    for (int k = 0; k < 6; ++k)
+      if (r.node[k] >= 0) winv += r.w[k] * r.w[k] * Real(model_.inv_mass[r.node[k]]);
+    if (winv <= Real(0)) return;  // every node clamped
+    if (delta > Real(0)) {
+      // Eq 9-10 with node masses: a relative displacement alpha * delta within the step.
+      const Real P = alpha * delta / (dt * winv);
+      r.P = P * u;
+      r.has_n = true;
+      cr_fn_step_[c] += double(P / dt);  // Eq 11
+    }
+    if (last) cr_gap_[c] = double(g.dist - D);
+    // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
+    // material coordinate on each yarn is the partner's contact point projected on this
+    // yarn's chord through its tracked node: continuous in time, unlike the raw closest
+    // point, which jumps between the equivalent segment pairs of the zig-zag.
+    V3 pa = V3::Zero(), pb = V3::Zero();
+    for (int k = 0; k < 3; ++k) {
+      if (r.node[k] >= 0) pa -= r.w[k] * x_[r.node[k]];
+      if (r.node[3 + k] >= 0) pb += r.w[3 + k] * x_[r.node[3 + k]];
+    }
+    V3 Tw, Tf;
+    const double cw = chord_coord(cr.warp_yarn, kw, pb, Tw);
+    const double cf = chord_coord(cr.weft_yarn, kf, pa, Tf);
+    if (cr_stick_w_[c] < 0) cr_stick_w_[c] = cw, cr_stick_f_[c] = cf;
+    Real fa, fb;
+    coord_nodes(cr.warp_yarn, cw, r.fnode[0], r.fnode[1], fa);
+    coord_nodes(cr.weft_yarn, cf, r.fnode[2], r.fnode[3], fb);
+    r.fw[0] = -(Real(1) - fa);
+    r.fw[1] = -fa;
+    r.fw[2] = Real(1) - fb;
+    r.fw[3] = fb;
+    double fwinv = 0;
+    for (int k = 0; k < 4; ++k) fwinv += double(r.fw[k] * r.fw[k]) * model_.inv_mass[r.fnode[k]];
+    const double fn = cr_fn_step_[c];
+    const double limit = model_.friction * fn;
+    double ft_w = 0, ft_f = 0, moved = 0;
+    bool slid = false;
+    if (fwinv > 0) {
+      // K = alpha_f m / dt^2, m the effective mass of the relative motion: alpha_f = 1
+      // returns the contact to its stuck point in exactly one step.
+      const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
+      auto one_yarn = [&](int yarn, double cur, double& stick, double& force) {
+        const double slip = double(arc_between(yarn, stick, cur));  // Delta s of Eq 12
+        const double trial = K * slip;
+        if (std::abs(trial) <= limit) {
+          force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
+        } else {
+          force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
+          const double new_stick = advance(yarn, cur, -force / K);
+          moved += std::abs(double(arc_between(yarn, stick, new_stick)));
+          stick = new_stick;
+          slid = true;
+        }
+      };
+      one_yarn(cr.warp_yarn, cw, cr_stick_w_[c], ft_w);
+      one_yarn(cr.weft_yarn, cf, cr_stick_f_[c], ft_f);
+    }
+    if (ft_w != 0 || ft_f != 0) {
+      // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
+      const V3 Fwarp = Real(ft_w) * Tw - Real(ft_f) * Tf;
+      r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
+      r.has_f = true;
+      cr_ft_[c] = double(Fwarp.norm());
+    }
+    if (last) {
+      cr_sliding_[c] = slid;
+      cr_slip_[c] = moved / double(dt);
+      cr_fn_[c] = fn;
+    }
   }
 
   // ------------------------------------------------------- projectile contact (Eq 18-22)
@@ -727,25 +838,6 @@ class SolverT final : public Solver {
     projectile_force_ = double(impulse_on_proj.norm() / dt);
   }
 
-  // A modelled node that reaches a symmetry plane meets its own mirror image there: it is
-  // stopped at the plane (perfectly inelastic, booked as contact loss), as the full model's
-  // yarn contact would do. Plane nodes themselves are held by their fixed velocity bit.
-  void symmetry_planes() {
-    if (!model_.mirror_x && !model_.mirror_y) return;
-    const Real dt = Real(model_.dt);
-    for (int i = 0; i < model_.node_count; ++i) {
-      for (int ax = 0; ax < 2; ++ax) {
-        if (!(ax == 0 ? model_.mirror_x : model_.mirror_y)) continue;
-        if (x_[i][ax] >= Real(0) || model_.fixed[i] == fix_all) continue;
-        // Velocity change that puts the predicted position back on the plane.
-        const Real dv = -x_[i][ax] / dt;
-        v_[i][ax] += dv;
-        dv_contact_[i][ax] += dv;
-        x_[i][ax] = Real(0);
-      }
-    }
-  }
-
   double fabric_ke() const {
     double ke = 0;
     for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(v_[i].squaredNorm());
@@ -786,7 +878,9 @@ class SolverT final : public Solver {
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
-  std::vector<std::uint8_t> cr_active_, cr_sliding_;
+  std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
+  std::vector<CrossingImpulse> impulses_;
+  enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8 };
   V3 xp_, vp_;
   double ke_half_ = 0, ke_fabric_half_ = 0;
   double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0,
