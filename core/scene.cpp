@@ -202,7 +202,7 @@ std::vector<KeyDef> make_defs() {
   }
   NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true, 1e5, solver.end_time_s);
   INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
-  NUM("solver.divergence_energy_factor", "", "a run whose ledger total exceeds this x the initial energy is declared diverged", 1, 1.0, true, 1e6, solver.divergence_energy_factor);
+  NUM("solver.max_balance_error", "", "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true, 1e3, solver.max_balance_error);
   NUM("output.history_interval_us", "us", "time between rows of history.csv", 1e-6, 0, true, 1e6, output.history_interval_s);
   BOOL("output.progress", "print a progress line on a terminal", output.progress);
   return defs;
@@ -265,16 +265,12 @@ void apply_number(Scene& s, const KeyDef& d, double v, const std::string& where)
   if (std::isinf(v)) throw SceneError(d.key, where, "is infinite; give a finite number");
   if (d.type == Type::integer && v != std::floor(v))
     throw SceneError(d.key, where, "must be a whole number, got " + fmt(v));
-  bool below = d.min_exclusive ? v <= d.min : v < d.min;
+  const bool below = d.min_exclusive ? v <= d.min : v < d.min;
   if (below || v > d.max) {
     std::string range;
-    if (d.min_exclusive && d.min == 0 && d.max == inf) range = "must be positive";
-    else if (d.min == 0 && d.max == inf) range = "must not be negative";
-    else {
-      range = "must be ";
-      range += d.min_exclusive ? "> " : ">= ";
-      range += fmt(d.min) + (d.max < inf ? " and <= " + fmt(d.max) : std::string());
-    }
+    if (below && d.min == 0) range = d.min_exclusive ? "must be positive" : "must not be negative";
+    else if (below) range = std::string("must be ") + (d.min_exclusive ? "> " : ">= ") + fmt(d.min);
+    else range = "must be <= " + fmt(d.max);
     throw SceneError(d.key, where, range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit));
   }
   d.set_number(s, v * d.scale);

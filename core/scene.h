@@ -75,7 +75,7 @@ struct SolverParams {
   Precision precision = Precision::double_precision;
   double end_time_s = 150e-6;
   int threads = 1;                  // 0 = all cores
-  double divergence_energy_factor = 1.5;  // total ledger energy above this x initial -> diverged
+  double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
 };
 
 struct OutputParams {

@@ -97,8 +97,8 @@ class Solver {
   // Projectile contact history, for perforation detection.
   bool had_contact() const { return had_contact_; }
   double last_contact_time() const { return last_contact_time_; }
-  // Ledger total above this x the initial energy -> diverged.
-  void set_divergence_factor(double f) { divergence_factor_ = f; }
+  // |ledger total - initial| / initial above this -> diverged.
+  void set_max_balance_error(double f) { max_balance_error_ = f; }
 
  protected:
   explicit Solver(Model m) : model_(std::move(m)) {}
@@ -116,7 +116,7 @@ class Solver {
   int broken_[2] = {0, 0};
   bool had_contact_ = false;
   double last_contact_time_ = -1;
-  double divergence_factor_ = 1.5;
+  double max_balance_error_ = 0.05;
 };
 
 // Make the solver for a model in the scene's precision.
