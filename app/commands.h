@@ -13,5 +13,8 @@ int cmd_run(const Args& args);        // app/cmd_run.cpp
 int cmd_snapshot(const Args& args);   // app/cmd_snapshot.cpp
 int cmd_gui(const Args& args);        // app/cmd_gui.cpp
 int cmd_keys(const Args& args);       // app/cmd_run.cpp: list scene keys
+int cmd_sweep(const Args& args);      // app/cmd_studies.cpp
+int cmd_limit(const Args& args);      // app/cmd_studies.cpp
+int cmd_paper(const Args& args);      // app/cmd_studies.cpp
 
 }  // namespace ravel::app

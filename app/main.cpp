@@ -16,6 +16,9 @@ void usage() {
       "  run [SCENE] --out DIR    one headless run: DIR/history.csv, DIR/summary.json\n"
       "  snapshot [SCENE] --at T_US[,T_US..] --out DIR   PNG images of the fabric\n"
       "  keys                     list every scene key with its unit\n"
+      "  sweep [SCENE] --vary key=a:b:step|v1,v2 --out DIR [--jobs N] [--shard i/n]   parameter sweep\n"
+      "  limit [SCENE] --out DIR [--tolerance MPS]   ballistic limit + Lambert-Jonas fit\n"
+      "  paper --out DIR [--quick]  reproduce the paper's studies, DIR/report.md\n"
       "  help                     this text\n\n"
       "SCENE is a TOML file or the name of a shipped scene (default: twaron_ct716).\n"
       "Exit codes: 0 done, 1 output error, 2 bad input, 3 run diverged, 130 interrupted.\n");
@@ -34,6 +37,9 @@ int main(int argc, char** argv) {
   }
   if (cmd == "run") return cmd_run(rest);
   if (cmd == "keys") return cmd_keys(rest);
+  if (cmd == "sweep") return cmd_sweep(rest);
+  if (cmd == "limit") return cmd_limit(rest);
+  if (cmd == "paper") return cmd_paper(rest);
 #ifdef RAVEL_HAVE_SNAPSHOT
   if (cmd == "snapshot") return cmd_snapshot(rest);
 #endif

@@ -1,0 +1,294 @@
+// The studies on the command line (docs/studies.md):
+//   ravel sweep [SCENE] --vary key=start:stop:step|v1,v2,... [--vary ...] --out DIR
+//               [--jobs N] [--shard i/n] [--set k=v ...] [--quiet]
+//   ravel limit [SCENE] [--set k=v ...] --out DIR [--tolerance MPS] [--start MPS] [--no-fit]
+//   ravel paper [--quick] [--jobs N] --out DIR
+// The logic lives in studies/ (ravel_studies); this file parses flags and prints.
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+
+#include "chart.h"
+#include "cli.h"
+#include "commands.h"
+#include "limit.h"
+#include "paper.h"
+#include "results.h"
+#include "sweep.h"
+#ifdef RAVEL_HAVE_RENDER
+#include "render/renderer.h"
+#endif
+
+namespace ravel::app {
+
+// app/cmd_run.cpp
+std::atomic<bool>& interrupt_flag();
+void install_signal_handlers();
+
+namespace {
+
+// The scene file the arguments name (the rules of load_scene_from).
+std::string resolved_scene_path(const CommonArgs& a) {
+  std::string path = a.scene_path.empty() ? default_scene_path() : a.scene_path;
+  if (!std::filesystem::exists(path)) {
+    const bool has_ext = path.size() > 5 && path.substr(path.size() - 5) == ".toml";
+    const std::string shipped = assets_dir() + "/scenes/" + path + (has_ext ? "" : ".toml");
+    if (std::filesystem::exists(shipped)) path = shipped;
+  }
+  return path;
+}
+
+double parse_positive(const CommonArgs& a, const std::string& flag, double fallback) {
+  auto it = a.flags.find(flag);
+  if (it == a.flags.end()) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (it->second.empty() || *end || !std::isfinite(v) || v <= 0)
+    throw UsageError("--" + flag + ": expected a positive number, got '" + it->second + "'");
+  return v;
+}
+
+int parse_jobs(const CommonArgs& a) {
+  auto it = a.flags.find("jobs");
+  if (it == a.flags.end()) return std::max(1u, std::thread::hardware_concurrency());
+  char* end = nullptr;
+  const long j = std::strtol(it->second.c_str(), &end, 10);
+  if (it->second.empty() || *end || j < 1 || j > 1024)
+    throw UsageError("--jobs: expected a whole number 1..1024, got '" + it->second + "'");
+  return int(j);
+}
+
+// Fail before anything is written when --out cannot be used.
+void check_out_dir(const std::string& dir) {
+  if (dir.empty()) throw UsageError("needs --out DIR");
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(dir, ec)) {
+    if (!fs::is_directory(dir, ec)) throw OutputError("--out " + dir + ": exists and is not a folder");
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) throw OutputError("--out " + dir + ": the folder is not writable");
+    return;
+  }
+  fs::path parent = fs::absolute(dir, ec).parent_path();
+  while (!parent.empty() && !fs::exists(parent, ec)) parent = parent.parent_path();
+  if (!parent.empty() && ::access(parent.c_str(), W_OK | X_OK) != 0)
+    throw OutputError("--out " + dir + ": cannot create it (" + parent.string() + " is not writable)");
+}
+
+bool progress_wanted(const CommonArgs& a) { return !has_switch(a, "quiet"); }
+
+}  // namespace
+
+int cmd_sweep(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"vary", "jobs", "shard"}, {"quiet"}, {"vary"});
+    if (!a.multi.count("vary")) throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
+    check_out_dir(a.out_dir);
+    studies::SweepOptions opt;
+    opt.scene_path = resolved_scene_path(a);
+    opt.overrides = a.overrides;
+    load_scene(opt.scene_path, opt.overrides);  // bad scene / --set: fail now
+    opt.out_dir = a.out_dir;
+    opt.jobs = parse_jobs(a);
+    opt.solver_threads = a.threads >= 0 ? a.threads : 1;
+    if (a.flags.count("shard")) opt.shard = studies::parse_shard(a.flags["shard"]);
+    std::vector<studies::Vary> vary;
+    std::vector<std::string> keys;
+    for (const auto& v : a.multi["vary"]) {
+      vary.push_back(studies::parse_vary(v, opt.scene_path, opt.overrides));
+      if (std::find(keys.begin(), keys.end(), vary.back().key) != keys.end())
+        throw UsageError("--vary " + vary.back().key + ": key varied twice");
+      keys.push_back(vary.back().key);
+    }
+    const auto all = studies::expand_cases(vary);
+    const auto mine = studies::shard_cases(all, opt.shard);
+    const bool verbose = progress_wanted(a);
+    if (verbose)
+      std::printf("sweep: %zu cases (%zu in shard %d/%d), %d jobs, out %s\n", all.size(), mine.size(), opt.shard.index,
+                  opt.shard.count, opt.jobs, opt.out_dir.c_str());
+    std::fflush(stdout);
+    install_signal_handlers();
+    studies::SweepHooks hooks;
+    hooks.on_case = [&](const studies::CaseResult& r) {
+      if (!verbose) return;
+      if (r.skipped) return;
+      if (!r.ok) {
+        std::fprintf(stderr, "  failed: %s: %s\n", r.c.name().c_str(), r.error.c_str());
+        return;
+      }
+      std::printf("  done: %s\n", r.c.name().c_str());
+      std::fflush(stdout);
+    };
+    hooks.on_progress = [&](const studies::SweepProgress& p) {
+      if (verbose && isatty(fileno(stderr)))
+        std::fprintf(stderr, "\r  [%d/%d] %.0f s  ", p.done, p.total, p.wall_time_s);
+    };
+    const auto rep = studies::run_sweep(all, mine, opt, keys, hooks, &interrupt_flag());
+    if (verbose && isatty(fileno(stderr))) std::fprintf(stderr, "\r%*s\r", 40, "");
+    std::printf("sweep: %d run, %d already finished, %d failed, %d diverged in %.1f s (%.0f cases/hour)\n",
+                rep.cases_run, rep.cases_skipped, rep.cases_failed, rep.cases_diverged, rep.wall_time_s,
+                rep.cases_per_hour);
+    std::printf("  %s/results.csv\n", opt.out_dir.c_str());
+    if (rep.interrupted) return exit_interrupted;
+    return rep.cases_failed ? exit_failure : exit_ok;
+  } catch (const studies::StudyError& e) {
+    std::fprintf(stderr, "ravel: %s\n", e.what());
+    return exit_usage;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+int cmd_limit(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"tolerance", "start", "max-runs"}, {"no-fit", "quiet"});
+    check_out_dir(a.out_dir);
+    const std::string scene_path = resolved_scene_path(a);
+    std::vector<std::string> ov = a.overrides;
+    if (a.threads >= 0) ov.push_back("solver.threads=" + std::to_string(a.threads));
+    const Scene scene = load_scene(scene_path, ov);
+    studies::LimitOptions lo;
+    lo.tolerance_mps = parse_positive(a, "tolerance", 1.0);
+    lo.start_mps = parse_positive(a, "start", 100.0);
+    lo.max_runs = int(parse_positive(a, "max-runs", 60));
+    prepare_output_dir(a.out_dir);
+    install_signal_handlers();
+    const bool verbose = progress_wanted(a);
+    auto shoot = studies::scene_shooter(scene_path, ov, &interrupt_flag());
+    auto logged = [&](double v, const std::string& why) {
+      const auto s = shoot(v, why);
+      if (verbose) {
+        std::printf("  %-7s %8.2f m/s: %s", why.c_str(), v, s.perforated ? "perforated" : "stopped");
+        if (s.perforated) std::printf(", residual %.1f m/s", s.residual_velocity_mps);
+        if (!s.decided) std::printf(" (undecided at end time)");
+        std::printf("  [%.1f s]\n", s.wall_time_s);
+        std::fflush(stdout);
+      }
+      return s;
+    };
+    if (verbose)
+      std::printf("limit: %s, tolerance %.3g m/s, end time %.0f us\n", scene.name.c_str(), lo.tolerance_mps,
+                  scene.solver.end_time_s * 1e6);
+    studies::LimitResult r;
+    try {
+      r = studies::find_ballistic_limit(logged, lo, !has_switch(a, "no-fit"));
+    } catch (const std::exception& e) {
+      if (interrupt_flag().load()) {
+        std::fprintf(stderr, "ravel: interrupted; nothing written\n");
+        return exit_interrupted;
+      }
+      throw;
+    }
+    write_file_atomic(a.out_dir + "/limit.json", studies::limit_json(r, lo, scene_path, ov));
+    // The residual-velocity chart: every run, and the fit where there is one.
+    studies::Chart c;
+    c.title = "Residual velocity vs impact velocity";
+    c.subtitle = scene.name;
+    c.x = {"impact velocity", "m/s"};
+    c.y = {"residual velocity", "m/s"};
+    studies::Series runs{"runs", {}, {}, studies::SeriesStyle::markers};
+    auto sorted = r.runs;
+    std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
+    for (const auto& s : sorted) {
+      runs.x.push_back(s.velocity_mps);
+      runs.y.push_back(s.perforated ? s.residual_velocity_mps : 0.0);
+    }
+    c.series.push_back(runs);
+    if (r.fit.ok && !sorted.empty()) {
+      studies::Series fit{"Lambert-Jonas fit", {}, {}, studies::SeriesStyle::line};
+      const double v1 = sorted.back().velocity_mps;
+      for (int i = 0; i <= 200; ++i) {
+        const double v = r.fit.vbl_mps + (v1 - r.fit.vbl_mps) * i / 200.0;
+        fit.x.push_back(v);
+        fit.y.push_back(r.fit.residual_at(v));
+      }
+      c.series.push_back(fit);
+    }
+    studies::write_chart(c, a.out_dir + "/residual_velocity");
+    for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
+    if (!r.bracketed) {
+      std::printf("limit: no bracket found in %zu runs (%.1f s); see %s/limit.json\n", r.runs.size(), r.wall_time_s,
+                  a.out_dir.c_str());
+      return exit_failure;
+    }
+    std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
+                r.ballistic_limit_mps, r.lo_mps, r.hi_mps, r.runs.size(), r.wall_time_s,
+                r.wall_time_s > 0 ? r.runs.size() / (r.wall_time_s / 3600) : 0.0);
+    if (r.fit.ok)
+      std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
+                  r.fit.p, r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
+    else if (!has_switch(a, "no-fit"))
+      std::printf("  Lambert-Jonas: %s\n", r.fit.note.c_str());
+    std::printf("  %s/limit.json, %s/residual_velocity.{png,svg,csv}\n", a.out_dir.c_str(), a.out_dir.c_str());
+    return exit_ok;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+int cmd_paper(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"jobs"}, {"quick", "quiet"});
+    check_out_dir(a.out_dir);
+    studies::PaperOptions opt;
+    opt.scene_path = resolved_scene_path(a);
+    opt.overrides = a.overrides;
+    if (a.threads >= 0) opt.overrides.push_back("solver.threads=" + std::to_string(a.threads));
+    load_scene(opt.scene_path, opt.overrides);
+    opt.out_dir = a.out_dir;
+    opt.jobs = parse_jobs(a);
+    opt.quick = has_switch(a, "quick");
+    const bool verbose = progress_wanted(a);
+#ifdef RAVEL_HAVE_RENDER
+    std::unique_ptr<render::HeadlessRenderer> renderer;
+    opt.render_png = [&renderer](const Frame& f, const std::string& path, std::string* err) {
+      if (!renderer) renderer = render::HeadlessRenderer::create(err);
+      if (!renderer) return false;
+      render::ViewOptions v;
+      v.view = render::ViewPreset::top;
+      return renderer->render_png(f, v, 1200, 1200, path, err);
+    };
+#endif
+    std::mutex mu;
+    std::string last_stage;
+    opt.on_progress = [&](const std::string& stage, int done, int total) {
+      if (!verbose) return;
+      std::lock_guard<std::mutex> lock(mu);
+      if (stage != last_stage && !last_stage.empty() && !isatty(fileno(stderr))) std::fprintf(stderr, "\n");
+      last_stage = stage;
+      if (isatty(fileno(stderr))) std::fprintf(stderr, "\r  %s: %d/%d   ", stage.c_str(), done, total);
+      else if (done == total || done % 10 == 0) std::fprintf(stderr, "  %s: %d/%d\n", stage.c_str(), done, total);
+    };
+    install_signal_handlers();
+    if (verbose)
+      std::printf("paper: %s mode, %d jobs, out %s\n", opt.quick ? "quick" : "full", opt.jobs, opt.out_dir.c_str());
+    std::fflush(stdout);
+    studies::PaperResult r;
+    try {
+      r = studies::run_paper(opt, &interrupt_flag());
+    } catch (const std::exception& e) {
+      if (interrupt_flag().load()) {
+        std::fprintf(stderr, "\nravel: interrupted; finished runs are kept, rerun to resume\n");
+        return exit_interrupted;
+      }
+      throw;
+    }
+    if (verbose && isatty(fileno(stderr))) std::fprintf(stderr, "\n");
+    std::printf("paper: %d runs in %.0f s (%.0f runs/hour); claims: %d agree, %d partly, %d differ, %d not measured\n",
+                r.runs, r.wall_time_s, r.runs_per_hour, r.claims_agree, r.claims_partly, r.claims_differ,
+                r.claims_unknown);
+    std::printf("  %s\n", r.report_path.c_str());
+    if (!r.warnings.empty()) std::printf("  %zu warnings (listed in the report)\n", r.warnings.size());
+    return exit_ok;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+}  // namespace ravel::app

@@ -1,0 +1,270 @@
+#include "limit.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+namespace ravel::studies {
+
+double LambertJonas::residual_at(double v) const {
+  if (v <= vbl_mps) return 0;
+  return a * std::pow(std::pow(v, p) - std::pow(vbl_mps, p), 1.0 / p);
+}
+
+namespace {
+
+// Sum of squares for (p, Vbl) with the best a; returns +inf outside the allowed region.
+double sse_best_a(const std::vector<double>& v, const std::vector<double>& vr, double p, double vbl, double vmin,
+                  double* a_out) {
+  if (!(p >= 1.0 && p <= 10.0) || !(vbl >= 0 && vbl < vmin)) return std::numeric_limits<double>::infinity();
+  // Scale velocities by vmin so pow() stays well conditioned for large p.
+  double sg = 0, sgg = 0;
+  std::vector<double> g(v.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    const double x = std::pow(v[i] / vmin, p) - std::pow(vbl / vmin, p);
+    g[i] = x > 0 ? vmin * std::pow(x, 1.0 / p) : 0.0;
+    sg += g[i] * vr[i];
+    sgg += g[i] * g[i];
+  }
+  if (sgg <= 0) return std::numeric_limits<double>::infinity();
+  const double a = sg / sgg;
+  double sse = 0;
+  for (size_t i = 0; i < v.size(); ++i) sse += (vr[i] - a * g[i]) * (vr[i] - a * g[i]);
+  if (a_out) *a_out = a;
+  return sse;
+}
+
+}  // namespace
+
+LambertJonas fit_lambert_jonas(const std::vector<double>& v_in, const std::vector<double>& vr_in, double vbl_hint) {
+  LambertJonas fit;
+  std::vector<double> v, vr;
+  for (size_t i = 0; i < std::min(v_in.size(), vr_in.size()); ++i)
+    if (std::isfinite(v_in[i]) && std::isfinite(vr_in[i]) && vr_in[i] > 0 && v_in[i] > 0) {
+      v.push_back(v_in[i]);
+      vr.push_back(vr_in[i]);
+    }
+  fit.points = int(v.size());
+  if (v.size() < 3) {
+    fit.note = "fewer than 3 perforating runs with a residual velocity: no fit";
+    return fit;
+  }
+  const double vmin = *std::min_element(v.begin(), v.end());
+  // Nelder-Mead over (p, Vbl) from several starts (the surface has long flat valleys).
+  auto f = [&](const std::array<double, 2>& q) { return sse_best_a(v, vr, q[0], q[1], vmin, nullptr); };
+  std::array<double, 2> best{2.0, 0.5 * vmin};
+  double best_f = std::numeric_limits<double>::infinity();
+  std::vector<double> vbl_starts{0.3 * vmin, 0.6 * vmin, 0.9 * vmin};
+  if (vbl_hint > 0 && vbl_hint < vmin) vbl_starts.push_back(vbl_hint);
+  for (double p0 : {1.5, 2.0, 3.0, 5.0})
+    for (double b0 : vbl_starts) {
+      std::array<std::array<double, 2>, 3> s{{{p0, b0}, {p0 * 1.2, b0}, {p0, b0 + 0.05 * (vmin - b0) + 0.01 * vmin}}};
+      std::array<double, 3> fs{f(s[0]), f(s[1]), f(s[2])};
+      for (int it = 0; it < 600; ++it) {
+        std::array<int, 3> o{0, 1, 2};
+        std::sort(o.begin(), o.end(), [&](int x, int y) { return fs[x] < fs[y]; });
+        const auto b = s[o[0]], m = s[o[1]], w = s[o[2]];
+        const double fb = fs[o[0]], fm = fs[o[1]], fw = fs[o[2]];
+        if (std::abs(fw - fb) <= 1e-14 * (1 + fb) && std::abs(w[0] - b[0]) < 1e-9 && std::abs(w[1] - b[1]) < 1e-9 * vmin)
+          break;
+        const std::array<double, 2> c{(b[0] + m[0]) / 2, (b[1] + m[1]) / 2};
+        auto along = [&](double t) { return std::array<double, 2>{c[0] + t * (w[0] - c[0]), c[1] + t * (w[1] - c[1])}; };
+        const auto r = along(-1);
+        const double fr = f(r);
+        if (fr < fb) {
+          const auto e = along(-2);
+          const double fe = f(e);
+          if (fe < fr) s[o[2]] = e, fs[o[2]] = fe;
+          else s[o[2]] = r, fs[o[2]] = fr;
+        } else if (fr < fm) {
+          s[o[2]] = r, fs[o[2]] = fr;
+        } else {
+          const auto k = fr < fw ? along(-0.5) : along(0.5);
+          const double fk = f(k);
+          if (fk < std::min(fr, fw)) {
+            s[o[2]] = k, fs[o[2]] = fk;
+          } else {  // shrink towards the best
+            for (int j : {o[1], o[2]}) {
+              s[j] = {(s[j][0] + b[0]) / 2, (s[j][1] + b[1]) / 2};
+              fs[j] = f(s[j]);
+            }
+          }
+        }
+      }
+      for (int j = 0; j < 3; ++j)
+        if (fs[j] < best_f) best_f = fs[j], best = s[j];
+    }
+  if (!std::isfinite(best_f)) {
+    fit.note = "the fit did not converge";
+    return fit;
+  }
+  fit.p = best[0];
+  fit.vbl_mps = best[1];
+  sse_best_a(v, vr, fit.p, fit.vbl_mps, vmin, &fit.a);
+  fit.rms_mps = std::sqrt(best_f / double(v.size()));
+  fit.ok = true;
+  if (v.size() == 3) fit.note = "3 points for 3 parameters: the fit interpolates, it does not test the law";
+  return fit;
+}
+
+LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit) {
+  const auto t0 = std::chrono::steady_clock::now();
+  LimitResult res;
+  auto fire = [&](double v, const char* why) {
+    Shot s = shoot(v, why);
+    s.velocity_mps = v;
+    s.purpose = why;
+    if (!s.decided) {
+      char b[200];
+      std::snprintf(b, sizeof b,
+                    "the run at %.2f m/s reached its end time undecided (counted as not perforated); raise "
+                    "solver.end_time_us",
+                    v);
+      res.warnings.push_back(b);
+    }
+    res.runs.push_back(s);
+    return s.perforated;
+  };
+  auto budget_left = [&] { return int(res.runs.size()) < opt.max_runs; };
+
+  // Bracket: walk from the start velocity by the growth factor until the outcome flips.
+  double v = std::clamp(opt.start_mps, opt.min_mps, opt.max_mps);
+  bool perf = fire(v, "bracket");
+  double lo = -1, hi = -1;
+  (perf ? hi : lo) = v;
+  while (budget_left() && (lo < 0 || hi < 0)) {
+    v = perf ? v / opt.growth : v * opt.growth;
+    if (v < opt.min_mps || v > opt.max_mps) break;
+    perf = fire(v, "bracket");
+    if (perf) hi = hi < 0 ? v : std::min(hi, v);
+    else lo = std::max(lo, v);
+  }
+  if (lo < 0 || hi < 0) {
+    res.warnings.push_back(lo < 0 ? "no velocity down to the minimum failed to perforate"
+                                  : "no velocity up to the maximum perforated");
+    res.lo_mps = lo;
+    res.hi_mps = hi;
+    res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return res;
+  }
+  res.bracketed = true;
+  // Bisection.
+  while (hi - lo > opt.tolerance_mps && budget_left()) {
+    const double mid = 0.5 * (lo + hi);
+    if (fire(mid, "bisect")) hi = mid;
+    else lo = mid;
+  }
+  res.lo_mps = lo;
+  res.hi_mps = hi;
+  res.converged = hi - lo <= opt.tolerance_mps;
+  res.ballistic_limit_mps = 0.5 * (lo + hi);
+  if (!res.converged) res.warnings.push_back("run budget exhausted before the bracket reached the tolerance");
+  // Monotonicity check over every run made.
+  for (const auto& s : res.runs) {
+    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
+      char b[200];
+      std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
+                    s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
+      res.warnings.push_back(b);
+    }
+  }
+  if (with_fit) {
+    for (double f : opt.fit_factors) {
+      const double vf = res.ballistic_limit_mps * f;
+      if (vf > opt.max_mps) continue;
+      fire(vf, "fit");
+    }
+    std::vector<double> vs, vrs;
+    for (const auto& s : res.runs)
+      if (s.perforated && s.velocity_mps >= hi) {
+        vs.push_back(s.velocity_mps);
+        vrs.push_back(s.residual_velocity_mps);
+      }
+    res.fit = fit_lambert_jonas(vs, vrs, res.ballistic_limit_mps);
+  }
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
+                      const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run) {
+  return [=](double v, const std::string&) {
+    auto ov = overrides;
+    char b[64];
+    std::snprintf(b, sizeof b, "projectile.velocity_mps=%.6f", v);
+    ov.push_back(b);
+    ov.push_back("output.progress=false");
+    Scene scene = load_scene(scene_path, ov);
+    Simulation sim(scene);
+    sim.run(interrupt);
+    const Summary s = sim.summary();
+    if (s.status == RunStatus::interrupted) throw std::runtime_error("interrupted");
+    if (s.status == RunStatus::diverged)
+      throw std::runtime_error("the run at " + std::to_string(v) + " m/s diverged: " + s.diagnosis);
+    if (on_run) on_run(sim);
+    Shot shot;
+    shot.velocity_mps = v;
+    shot.perforated = s.perforated;
+    shot.residual_velocity_mps = s.residual_velocity_mps;
+    shot.energy_absorbed_J = s.energy_absorbed_J;
+    shot.perforation_time_s = s.perforation_time_s;
+    shot.end_reason = to_string(s.end_reason);
+    shot.decided = s.end_reason != EndReason::end_time;
+    shot.wall_time_s = s.wall_time_s;
+    shot.broken_warp_yarns = s.broken_warp_yarns;
+    shot.broken_weft_yarns = s.broken_weft_yarns;
+    return shot;
+  };
+}
+
+std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
+                       const std::vector<std::string>& overrides) {
+  nlohmann::ordered_json j;
+  j["ballistic_limit_mps"] = r.bracketed ? nlohmann::ordered_json(r.ballistic_limit_mps) : nlohmann::ordered_json(nullptr);
+  j["bracket_mps"] = {r.lo_mps, r.hi_mps};
+  j["bracket_note"] = "lo: highest velocity that did not perforate; hi: lowest that perforated";
+  j["tolerance_mps"] = opt.tolerance_mps;
+  j["bracketed"] = r.bracketed;
+  j["converged"] = r.converged;
+  nlohmann::ordered_json f;
+  f["law"] = "Vr = a (V^p - Vbl^p)^(1/p)";
+  f["ok"] = r.fit.ok;
+  f["a"] = r.fit.a;
+  f["p"] = r.fit.p;
+  f["vbl_mps"] = r.fit.vbl_mps;
+  f["rms_mps"] = r.fit.rms_mps;
+  f["points"] = r.fit.points;
+  f["note"] = r.fit.note;
+  j["lambert_jonas"] = f;
+  j["runs"] = nlohmann::ordered_json::array();
+  for (const auto& s : r.runs) {
+    nlohmann::ordered_json q;
+    q["velocity_mps"] = s.velocity_mps;
+    q["purpose"] = s.purpose;
+    q["perforated"] = s.perforated;
+    q["residual_velocity_mps"] = s.residual_velocity_mps;
+    q["energy_absorbed_J"] = s.energy_absorbed_J;
+    q["perforation_time_s"] = s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
+    q["end_reason"] = s.end_reason;
+    q["decided"] = s.decided;
+    q["broken_warp_yarns"] = s.broken_warp_yarns;
+    q["broken_weft_yarns"] = s.broken_weft_yarns;
+    q["wall_time_s"] = s.wall_time_s;
+    j["runs"].push_back(q);
+  }
+  j["warnings"] = r.warnings;
+  j["scene"] = scene_path;
+  j["overrides"] = overrides;
+  j["start_mps"] = opt.start_mps;
+  j["growth"] = opt.growth;
+  j["wall_time_s"] = r.wall_time_s;
+  j["runs_per_hour"] = r.wall_time_s > 0 ? double(r.runs.size()) / (r.wall_time_s / 3600) : 0.0;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace ravel::studies

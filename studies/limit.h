@@ -1,0 +1,82 @@
+// Ballistic limit: the lowest impact velocity that perforates (SPEC §8), found by
+// bracketing and bisection, and the Lambert-Jonas fit of residual velocity above it:
+//   Vr = a (V^p - Vbl^p)^(1/p)   for V > Vbl,  0 below.
+//
+// The search is written against a "shoot" function (velocity -> outcome) so it can be
+// tested on synthetic targets and run on any scene. Bisection assumes perforation is
+// monotone in velocity; runs that contradict that are kept and reported as warnings.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "simulation.h"
+
+namespace ravel::studies {
+
+struct Shot {
+  double velocity_mps = 0;
+  bool perforated = false;
+  double residual_velocity_mps = 0;
+  double energy_absorbed_J = 0;
+  double perforation_time_s = -1;
+  std::string end_reason;       // perforated | rebounded | end_time | ...
+  bool decided = true;          // false: reached end_time neither perforated nor turned back
+  double wall_time_s = 0;
+  int broken_warp_yarns = 0, broken_weft_yarns = 0;
+  std::string purpose;          // bracket | bisect | fit
+};
+
+using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
+
+struct LimitOptions {
+  double start_mps = 100;       // first velocity tried
+  double growth = 1.5;          // bracketing factor
+  double tolerance_mps = 1.0;   // stop when hi - lo <= tolerance
+  double min_mps = 1, max_mps = 3000;
+  int max_runs = 60;
+  std::vector<double> fit_factors{1.25, 1.6, 2.2, 3.0};  // extra runs at BL x factor for the fit
+};
+
+struct LambertJonas {
+  bool ok = false;
+  double a = 1, p = 2, vbl_mps = 0;
+  double rms_mps = 0;           // root-mean-square residual of the fit
+  int points = 0;
+  std::string note;
+  double residual_at(double v) const;
+};
+
+// Least squares over (a, p, Vbl): for fixed (p, Vbl) the best a is closed-form; (p, Vbl)
+// by Nelder-Mead with Vbl in [0, min V) and p in [1, 10]. Needs >= 3 points with Vr > 0.
+// `vbl_hint` seeds the search (e.g. the bisection result); <= 0: from the data.
+LambertJonas fit_lambert_jonas(const std::vector<double>& v, const std::vector<double>& vr, double vbl_hint = -1);
+
+struct LimitResult {
+  bool bracketed = false, converged = false;
+  double lo_mps = 0;            // highest velocity that did not perforate
+  double hi_mps = 0;            // lowest velocity that perforated
+  double ballistic_limit_mps = 0;  // (lo + hi) / 2, within tolerance / 2 of either end
+  std::vector<Shot> runs;       // every run, in order
+  LambertJonas fit;
+  std::vector<std::string> warnings;
+  double wall_time_s = 0;
+};
+
+LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
+
+// A ShootFn that runs `scene_path` with `overrides` plus projectile.velocity_mps=V.
+// `on_run` (optional) sees each finished Simulation (e.g. to keep a frame). Throws
+// std::runtime_error when a run diverges or is interrupted (a bracket built on a
+// diverged run would be meaningless).
+ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
+                      const std::atomic<bool>* interrupt = nullptr,
+                      std::function<void(const Simulation&)> on_run = {});
+
+// limit.json: the result, the fit, every run, and what was run.
+std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
+                       const std::vector<std::string>& overrides);
+
+}  // namespace ravel::studies

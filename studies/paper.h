@@ -1,0 +1,60 @@
+// The paper's studies (SPEC §9) reproduced with the default scene, written as charts,
+// images and DIR/report.md with a claim-by-claim comparison.
+//
+// Runs go through the sweep machinery (parallel, resumable) and the ballistic-limit
+// search (one search per friction coefficient, searches in parallel). Images are drawn
+// by a callback so this library stays free of OpenGL.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "frame.h"
+
+namespace ravel::studies {
+
+struct PaperPlan {
+  bool quick = false;
+  std::vector<double> velocities_mps;          // Fig. 11, 13
+  std::vector<double> frictions;               // Fig. 13, 14
+  std::vector<double> failure_strains;         // Fig. 11 (at mu = 0.2)
+  std::vector<double> limit_frictions;         // Fig. 16 (plus the pin-jointed model)
+  std::vector<double> image_velocities_mps;    // Fig. 8, 12 (at mu = 0.2)
+  std::vector<double> image_limit_frictions;   // Fig. 17: images at the BL
+  double history_velocity_mps = 260;           // Fig. 14, 15
+  double limit_tolerance_mps = 1;
+  double velocity_end_time_us = 400;
+  double limit_end_time_us = 3000;
+  std::vector<std::string> extra_overrides;    // what quick mode changes
+  std::string description;                     // one line for charts and the report
+};
+
+PaperPlan paper_plan(bool quick);
+
+struct PaperOptions {
+  std::string scene_path;                      // resolved path of the base scene
+  std::vector<std::string> overrides;          // user --set, applied before the plan's
+  std::string out_dir;
+  int jobs = 1;
+  bool quick = false;
+  // Draw `frame` to a PNG at `path`; returns false and says why when it cannot.
+  std::function<bool(const Frame& frame, const std::string& path, std::string* error)> render_png;
+  // Progress: stage name, cases done, cases total.
+  std::function<void(const std::string& stage, int done, int total)> on_progress;
+};
+
+struct PaperResult {
+  std::string report_path;
+  double wall_time_s = 0;
+  int runs = 0;
+  double runs_per_hour = 0;
+  int claims_agree = 0, claims_partly = 0, claims_differ = 0, claims_unknown = 0;
+  std::vector<std::string> warnings;
+};
+
+// Throws on bad input / output errors; an interrupt stops between runs (rerun resumes).
+PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrupt = nullptr);
+
+}  // namespace ravel::studies

@@ -1,0 +1,427 @@
+#include "sweep.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "results.h"
+
+namespace ravel::studies {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto a = s.find_first_not_of(" \t");
+  if (a == std::string::npos) return "";
+  const auto b = s.find_last_not_of(" \t");
+  return s.substr(a, b - a + 1);
+}
+
+bool parse_number(const std::string& s, double* v) {
+  char* end = nullptr;
+  *v = std::strtod(s.c_str(), &end);
+  return !s.empty() && *end == 0 && std::isfinite(*v);
+}
+
+std::string format_number(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
+
+std::string host_name() {
+  char h[256] = {0};
+  if (gethostname(h, sizeof h - 1) != 0) return "host";
+  std::string s(h);
+  for (char& c : s)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return s;
+}
+
+}  // namespace
+
+Vary parse_vary(const std::string& text, const std::string& base_scene_path,
+                const std::vector<std::string>& base_overrides) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw StudyError("--vary '" + text + "': expected key=start:stop:step or key=v1,v2,...");
+  Vary v;
+  v.key = trim(text.substr(0, eq));
+  const std::string spec = trim(text.substr(eq + 1));
+  const auto& keys = scene_keys();
+  if (std::none_of(keys.begin(), keys.end(), [&](const SceneKeyInfo& k) { return k.key == v.key; }))
+    throw StudyError("--vary " + v.key + ": unknown scene key (see 'ravel keys')");
+  if (v.key == "name" || v.key == "solver.threads" || v.key == "output.progress")
+    throw StudyError("--vary " + v.key + ": this key does not change the physics; vary a physical key");
+  if (spec.empty()) throw StudyError("--vary " + v.key + ": no values given");
+  if (spec.find(':') != std::string::npos) {
+    std::vector<std::string> parts;
+    std::stringstream ss(spec);
+    std::string p;
+    while (std::getline(ss, p, ':')) parts.push_back(trim(p));
+    double a, b, step;
+    if (parts.size() != 3 || !parse_number(parts[0], &a) || !parse_number(parts[1], &b) ||
+        !parse_number(parts[2], &step))
+      throw StudyError("--vary " + v.key + ": range '" + spec + "' is not start:stop:step with three numbers");
+    if (step <= 0) throw StudyError("--vary " + v.key + ": step must be > 0 in '" + spec + "'");
+    if (b < a) throw StudyError("--vary " + v.key + ": stop < start in '" + spec + "'");
+    const double n = std::floor((b - a) / step + 1e-9);
+    if (n > 100000) throw StudyError("--vary " + v.key + ": range '" + spec + "' has more than 100000 values");
+    for (int i = 0; i <= int(n); ++i) v.values.push_back(format_number(a + i * step));
+  } else {
+    std::stringstream ss(spec);
+    std::string p;
+    while (std::getline(ss, p, ',')) {
+      p = trim(p);
+      if (p.empty()) throw StudyError("--vary " + v.key + ": empty value in list '" + spec + "'");
+      if (std::find(v.values.begin(), v.values.end(), p) != v.values.end())
+        throw StudyError("--vary " + v.key + ": value '" + p + "' listed twice");
+      v.values.push_back(p);
+    }
+  }
+  // Validate every value as the scene loader would (ranges, types), before running anything.
+  for (const auto& val : v.values) {
+    auto ov = base_overrides;
+    ov.push_back(v.key + "=" + val);
+    try {
+      load_scene(base_scene_path, ov);
+    } catch (const SceneError& e) {
+      throw StudyError("--vary " + v.key + ": value '" + val + "' is not accepted: " + e.problem());
+    }
+  }
+  return v;
+}
+
+std::string Case::name() const {
+  std::string n;
+  for (const auto& [k, v] : settings) {
+    if (!n.empty()) n += "__";
+    n += k + "=" + v;
+  }
+  if (n.empty()) n = "base";
+  for (char& c : n)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '=' || c == '-' || c == '+' || c == '_'))
+      c = '_';
+  if (n.size() > 200) {  // keep folder names legal; the settings are in case.json
+    n = n.substr(0, 180) + "_" + std::to_string(std::hash<std::string>{}(n) % 100000000);
+  }
+  return n;
+}
+
+std::vector<std::string> Case::overrides() const {
+  std::vector<std::string> o;
+  for (const auto& [k, v] : settings) o.push_back(k + "=" + v);
+  return o;
+}
+
+std::vector<Case> expand_cases(const std::vector<Vary>& vary) {
+  std::vector<Case> out(1);
+  for (const auto& v : vary) {
+    std::vector<Case> next;
+    for (const auto& c : out)
+      for (const auto& val : v.values) {
+        Case d = c;
+        d.settings.emplace_back(v.key, val);
+        next.push_back(d);
+      }
+    out = std::move(next);
+  }
+  for (size_t i = 0; i < out.size(); ++i) out[i].index = int(i);
+  return out;
+}
+
+Shard parse_shard(const std::string& text) {
+  Shard s;
+  char slash = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &s.index, &slash, &s.count, &rest) != 3 || slash != '/' || s.count < 1 ||
+      s.index < 1 || s.index > s.count)
+    throw StudyError("--shard: expected i/n with 1 <= i <= n (e.g. 3/8), got '" + text + "'");
+  return s;
+}
+
+std::vector<Case> shard_cases(const std::vector<Case>& all, Shard shard) {
+  std::vector<Case> out;
+  for (const auto& c : all)
+    if (shard.contains(c.index)) out.push_back(c);
+  return out;
+}
+
+std::string case_dir(const std::string& out_dir, const Case& c) { return out_dir + "/" + c.name(); }
+
+bool case_finished(const std::string& out_dir, const Case& c) {
+  std::error_code ec;
+  return fs::exists(case_dir(out_dir, c) + "/summary.json", ec);
+}
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw OutputError(path + ": cannot read");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+namespace {
+
+std::string csv_cell(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return o + "\"";
+}
+
+std::string json_cell(const nlohmann::json& v) {
+  if (v.is_null()) return "";
+  if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+  if (v.is_number_integer()) return std::to_string(v.get<long long>());
+  if (v.is_number()) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.9g", v.get<double>());
+    return b;
+  }
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_array()) return std::to_string(v.size());
+  return v.dump();
+}
+
+// Remove temporary case folders left by killed runs of this host (the process is gone).
+void remove_stale_temporaries(const std::string& out_dir) {
+  const std::string mine = "-" + host_name() + "-";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(out_dir, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind(".tmp-", 0) != 0) continue;
+    const auto at = n.rfind(mine);
+    if (at == std::string::npos) continue;
+    const long pid = std::strtol(n.c_str() + at + mine.size(), nullptr, 10);
+    if (pid > 0 && ::kill(pid_t(pid), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
+  }
+}
+
+}  // namespace
+
+std::string results_csv(const std::string& out_dir, const std::vector<Case>& cases,
+                        const std::vector<std::string>& varied_keys) {
+  std::vector<std::string> summary_keys;
+  std::vector<std::pair<const Case*, nlohmann::ordered_json>> rows;
+  for (const auto& c : cases) {
+    if (!case_finished(out_dir, c)) continue;
+    nlohmann::ordered_json j;
+    try {
+      j = nlohmann::ordered_json::parse(read_text_file(case_dir(out_dir, c) + "/summary.json"));
+    } catch (const std::exception& e) {
+      throw OutputError(case_dir(out_dir, c) + "/summary.json: unreadable (" + e.what() + ")");
+    }
+    for (auto it = j.begin(); it != j.end(); ++it) {
+      const std::string k = it.value().is_array() ? it.key() + "_count" : it.key();
+      if (std::find(summary_keys.begin(), summary_keys.end(), k) == summary_keys.end()) summary_keys.push_back(k);
+    }
+    rows.emplace_back(&c, std::move(j));
+  }
+  std::string out = "case";
+  for (const auto& k : varied_keys) out += "," + csv_cell(k);
+  for (const auto& k : summary_keys) out += "," + csv_cell(k);
+  out += "\n";
+  for (const auto& [c, j] : rows) {
+    out += csv_cell(c->name());
+    for (const auto& k : varied_keys) {
+      std::string v;
+      for (const auto& [sk, sv] : c->settings)
+        if (sk == k) v = sv;
+      out += "," + csv_cell(v);
+    }
+    for (const auto& k : summary_keys) {
+      std::string v;
+      if (j.contains(k)) v = json_cell(j[k]);
+      else if (k.size() > 6 && k.substr(k.size() - 6) == "_count" && j.contains(k.substr(0, k.size() - 6)))
+        v = json_cell(j[k.substr(0, k.size() - 6)]);
+      out += "," + csv_cell(v);
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+int Csv::column(const std::string& name) const {
+  for (size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return int(i);
+  return -1;
+}
+
+Csv parse_csv(const std::string& text) {
+  Csv csv;
+  std::vector<std::string> row;
+  std::string cell;
+  bool quoted = false, any = false;
+  auto end_row = [&] {
+    row.push_back(cell);
+    cell.clear();
+    if (csv.header.empty()) csv.header = row;
+    else csv.rows.push_back(row);
+    row.clear();
+    any = false;
+  };
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        cell += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cell += c;
+      }
+      continue;
+    }
+    if (c == '"') quoted = true, any = true;
+    else if (c == ',') row.push_back(cell), cell.clear(), any = true;
+    else if (c == '\n') end_row();
+    else if (c != '\r') cell += c, any = true;
+  }
+  if (any || !cell.empty() || !row.empty()) end_row();
+  return csv;
+}
+
+SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
+                      const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
+                      const std::atomic<bool>* interrupt) {
+  prepare_output_dir(opt.out_dir);
+  remove_stale_temporaries(opt.out_dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+
+  SweepReport rep;
+  rep.cases_total = int(all_cases.size());
+  rep.cases_in_shard = int(todo.size());
+  SweepProgress prog;
+  prog.total = int(todo.size());
+  std::mutex mu;
+  std::atomic<size_t> next{0};
+  std::atomic<long> tmp_counter{0};
+  const std::string host = host_name();
+
+  auto report_case = [&](const CaseResult& r) {
+    std::lock_guard<std::mutex> lock(mu);
+    ++prog.done;
+    if (r.skipped) ++prog.skipped, ++rep.cases_skipped;
+    else if (!r.ok) ++prog.failed, ++rep.cases_failed, rep.errors.push_back(r.c.name() + ": " + r.error);
+    else ++rep.cases_run;
+    prog.wall_time_s = elapsed();
+    if (hooks.on_case) hooks.on_case(r);
+    if (hooks.on_progress) hooks.on_progress(prog);
+  };
+
+  auto worker = [&] {
+    for (;;) {
+      if (interrupt && interrupt->load()) return;
+      const size_t i = next.fetch_add(1);
+      if (i >= todo.size()) return;
+      const Case& c = todo[i];
+      CaseResult r;
+      r.c = c;
+      const std::string final_dir = case_dir(opt.out_dir, c);
+      if (case_finished(opt.out_dir, c)) {
+        r.skipped = true;
+        report_case(r);
+        continue;
+      }
+      const std::string tmp = opt.out_dir + "/.tmp-" + c.name().substr(0, 120) + "-" + host + "-" +
+                              std::to_string(::getpid()) + "-" + std::to_string(tmp_counter.fetch_add(1));
+      std::error_code ec;
+      try {
+        auto ov = opt.overrides;
+        for (const auto& o : c.overrides()) ov.push_back(o);
+        ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
+        ov.push_back("output.progress=false");
+        Scene scene = load_scene(opt.scene_path, ov);
+        fs::remove_all(tmp, ec);
+        fs::create_directories(tmp, ec);
+        if (ec) throw OutputError(tmp + ": cannot create (" + ec.message() + ")");
+        Simulation sim(scene);
+        sim.run(interrupt);
+        if (sim.summary().status == RunStatus::interrupted) {
+          fs::remove_all(tmp, ec);
+          return;  // not finished: a rerun resumes it
+        }
+        if (sim.summary().status == RunStatus::diverged) {
+          std::lock_guard<std::mutex> lock(mu);
+          ++rep.cases_diverged;
+        }
+        nlohmann::ordered_json cj;
+        cj["index"] = c.index;
+        cj["name"] = c.name();
+        cj["settings"] = nlohmann::ordered_json::object();
+        for (const auto& [k, v] : c.settings) cj["settings"][k] = v;
+        cj["base_scene"] = opt.scene_path;
+        cj["base_overrides"] = opt.overrides;
+        write_file_atomic(tmp + "/case.json", cj.dump(2) + "\n");
+        if (hooks.on_simulation) {
+          std::lock_guard<std::mutex> lock(mu);
+          hooks.on_simulation(c, sim, tmp);
+        }
+        write_run_outputs(tmp, sim);  // summary.json last
+        r.summary_json_text = summary_json(sim.summary(), sim.scene());
+        // Publish the whole folder at once. Another shard may have finished it meanwhile.
+        if (case_finished(opt.out_dir, c)) {
+          fs::remove_all(tmp, ec);
+        } else {
+          fs::remove_all(final_dir, ec);  // an incomplete folder not made by ravel
+          fs::rename(tmp, final_dir, ec);
+          if (ec) throw OutputError(final_dir + ": cannot move the finished case into place (" + ec.message() + ")");
+        }
+      } catch (const std::exception& e) {
+        fs::remove_all(tmp, ec);
+        r.ok = false;
+        r.error = e.what();
+      }
+      report_case(r);
+    }
+  };
+
+  const int jobs = std::max(1, std::min<int>(opt.jobs, std::max<int>(1, int(todo.size()))));
+  std::vector<std::thread> pool;
+  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+
+  rep.interrupted = interrupt && interrupt->load();
+  rep.wall_time_s = elapsed();
+  rep.cases_per_hour = rep.wall_time_s > 0 ? rep.cases_run / (rep.wall_time_s / 3600.0) : 0;
+
+  write_file_atomic(opt.out_dir + "/results.csv", results_csv(opt.out_dir, all_cases, varied_keys));
+  nlohmann::ordered_json sj;
+  sj["scene"] = opt.scene_path;
+  sj["overrides"] = opt.overrides;
+  sj["varied_keys"] = varied_keys;
+  sj["shard"] = std::to_string(opt.shard.index) + "/" + std::to_string(opt.shard.count);
+  sj["jobs"] = jobs;
+  sj["cases_total"] = rep.cases_total;
+  sj["cases_in_shard"] = rep.cases_in_shard;
+  sj["cases_run"] = rep.cases_run;
+  sj["cases_skipped"] = rep.cases_skipped;
+  sj["cases_failed"] = rep.cases_failed;
+  sj["cases_diverged"] = rep.cases_diverged;
+  sj["interrupted"] = rep.interrupted;
+  sj["wall_time_s"] = rep.wall_time_s;
+  sj["cases_per_hour"] = rep.cases_per_hour;
+  sj["errors"] = rep.errors;
+  const std::string name = opt.shard.count == 1 ? "sweep.json"
+                                                : "sweep_shard" + std::to_string(opt.shard.index) + "of" +
+                                                      std::to_string(opt.shard.count) + ".json";
+  write_file_atomic(opt.out_dir + "/" + name, sj.dump(2) + "\n");
+  return rep;
+}
+
+}  // namespace ravel::studies

@@ -1,0 +1,131 @@
+// Sweeps: many runs of one scene with some keys varied, each run a "case".
+//
+// A case is a list of scene overrides ("projectile.velocity_mps=300"). Its folder name is
+// made from those settings, so a rerun (even with a longer --vary list) finds the cases it
+// already finished. Each case is run in a hidden temporary folder and renamed into place
+// only when history.csv, scene.toml, case.json and summary.json are all written: a case
+// folder either exists complete or not at all. Cases run on a pool of threads, each with
+// its own Simulation (solver.threads = 1 unless asked otherwise), so results never depend
+// on --jobs. --shard i/n keeps cases whose index k satisfies k mod n == i - 1.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "scene.h"
+#include "simulation.h"
+
+namespace ravel::studies {
+
+// A bad --vary / --shard / --jobs value: names the flag (and key) and the problem.
+class StudyError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Vary {
+  std::string key;                  // scene key, e.g. projectile.velocity_mps
+  std::vector<std::string> values;  // as text, exactly as they go into --set
+};
+
+// "key=start:stop:step" (inclusive of stop within 1e-9 of a step) or "key=v1,v2,...".
+// Checks the key against scene_keys() and each value against the scene's validation
+// (applied to `base`). Throws StudyError naming the flag, key and problem.
+Vary parse_vary(const std::string& text, const std::string& base_scene_path = "",
+                const std::vector<std::string>& base_overrides = {});
+
+struct Case {
+  int index = 0;                                         // position in the full sweep
+  std::vector<std::pair<std::string, std::string>> settings;  // key, value
+  std::string name() const;                              // folder name, from the settings
+  std::vector<std::string> overrides() const;            // "key=value"
+};
+
+// Every combination; the last --vary changes fastest.
+std::vector<Case> expand_cases(const std::vector<Vary>& vary);
+
+struct Shard {
+  int index = 1, count = 1;  // 1-based: 1/1 = everything
+  bool contains(int case_index) const { return case_index % count == index - 1; }
+};
+Shard parse_shard(const std::string& text);  // "i/n", 1 <= i <= n
+std::vector<Case> shard_cases(const std::vector<Case>& all, Shard shard);
+
+struct SweepOptions {
+  std::string scene_path;                 // "" = default scene
+  std::vector<std::string> overrides;     // base --set overrides, applied before each case's
+  std::string out_dir;
+  int jobs = 1;                           // concurrent cases
+  int solver_threads = 1;                 // solver.threads of each case
+  Shard shard;
+};
+
+// One finished (or previously finished) case.
+struct CaseResult {
+  Case c;
+  bool skipped = false;                   // found finished on disk, not run now
+  bool ok = true;                         // false: failed to run (error text in error)
+  std::string error;
+  std::string summary_json_text;          // the case's summary.json
+};
+
+struct SweepProgress {
+  int total = 0;        // cases in this shard
+  int done = 0;         // finished now or before
+  int skipped = 0;      // found finished
+  int failed = 0;
+  double wall_time_s = 0;
+};
+
+struct SweepReport {
+  int cases_total = 0;        // in the whole sweep
+  int cases_in_shard = 0;
+  int cases_run = 0;          // run now
+  int cases_skipped = 0;      // already finished
+  int cases_failed = 0;
+  int cases_diverged = 0;     // ran but the simulation diverged (still written)
+  double wall_time_s = 0;
+  double cases_per_hour = 0;  // cases run now / wall hours
+  bool interrupted = false;
+  std::vector<std::string> errors;
+};
+
+// Hooks are called from worker threads, one at a time (under a lock).
+struct SweepHooks {
+  std::function<void(const SweepProgress&)> on_progress;
+  std::function<void(const CaseResult&)> on_case;
+  // Called after each case's Simulation finished, before its folder is renamed into place
+  // (extra outputs, e.g. images; `case_tmp_dir` is the folder being prepared).
+  std::function<void(const Case&, const Simulation&, const std::string& case_tmp_dir)> on_simulation;
+};
+
+// Run the cases (already sharded) in parallel; resumes; writes DIR/results.csv with
+// every finished case of `all_cases` (not only this shard's), and DIR/sweep.json.
+SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
+                      const std::vector<std::string>& varied_keys, const SweepHooks& hooks = {},
+                      const std::atomic<bool>* interrupt = nullptr);
+
+// Is the case finished in `out_dir` (its folder holds summary.json)?
+bool case_finished(const std::string& out_dir, const Case& c);
+std::string case_dir(const std::string& out_dir, const Case& c);
+
+// results.csv: columns = varied keys, then every scalar key of summary.json, in order.
+// One row per finished case (cases not finished are left out). Returns the CSV text.
+std::string results_csv(const std::string& out_dir, const std::vector<Case>& cases,
+                        const std::vector<std::string>& varied_keys);
+
+// Parse a CSV (as written here) into a header and rows of cells.
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  int column(const std::string& name) const;  // -1 if absent
+};
+Csv parse_csv(const std::string& text);
+std::string read_text_file(const std::string& path);
+
+}  // namespace ravel::studies
