@@ -27,27 +27,44 @@ struct ZenerStep {
   double dissipated;   // J per m^3 over the step
 };
 
-// Advance one element from (eps0, ev0) to eps1 over dt.
-template <class R>
-inline ZenerStep zener_update(const ZenerConstants& c, R eps0, R eps1, R ev0, double dt, double decay,
-                              double slack_decay) {
-  // decay = exp(-dt/tau), slack_decay = exp(-dt K2/mu): precomputed, dt is fixed.
-  const double lam = 1.0 / c.tau();
-  const double g = c.k1 / (c.k1 + c.k2);
-  const double r = (double(eps1) - double(eps0)) / dt;
-  const double C = double(ev0) - g * (double(eps0) - r / lam);
-  const double ev1 = g * (double(eps1) - r / lam) + C * decay;
-  const double stress = c.k1 * (double(eps1) - ev1);
-  if (stress >= 0.0) {
-    // integral of (g r - lam C e^{-lam s})^2 ds over [0, dt]
-    const double diss = c.mu * (g * g * r * r * dt - 2.0 * g * r * C * (1.0 - decay) +
-                                0.5 * lam * C * C * (1.0 - decay * decay));
-    return {ev1, stress, diss};
+// The update for a fixed step dt, with everything that does not depend on the element
+// precomputed (the solver makes one per run).
+struct ZenerStepper {
+  ZenerConstants c;
+  double dt, inv_dt, lam, g, decay, slack_decay;
+  ZenerStepper(const ZenerConstants& z, double step)
+      : c(z),
+        dt(step),
+        inv_dt(1.0 / step),
+        lam(1.0 / z.tau()),
+        g(z.k1 / (z.k1 + z.k2)),
+        decay(std::exp(-step / z.tau())),
+        slack_decay(std::exp(-step * z.k2 / z.mu)) {}
+
+  // Advance one element from (eps0, ev0) to eps1.
+  ZenerStep step(double eps0, double eps1, double ev0) const {
+    const double r = (eps1 - eps0) * inv_dt;
+    const double C = ev0 - g * (eps0 - r / lam);
+    const double ev1 = g * (eps1 - r / lam) + C * decay;
+    const double stress = c.k1 * (eps1 - ev1);
+    if (stress >= 0.0) {
+      // integral of (g r - lam C e^{-lam s})^2 ds over [0, dt]
+      const double diss =
+          c.mu * (g * g * r * r * dt - 2.0 * g * r * C * (1.0 - decay) + 0.5 * lam * C * C * (1.0 - decay * decay));
+      return {ev1, stress, diss};
+    }
+    // Slack: sigma = 0, Kelvin-Voigt unit relaxes: e_v = ev0 exp(-K2 s / mu).
+    const double evs = ev0 * slack_decay;
+    return {evs, 0.0, 0.5 * c.k2 * (ev0 * ev0 - evs * evs)};
   }
-  // Slack: sigma = 0, Kelvin-Voigt unit relaxes: e_v = ev0 exp(-K2 s / mu).
-  const double evs = double(ev0) * slack_decay;
-  const double diss = 0.5 * c.k2 * (double(ev0) * double(ev0) - evs * evs);
-  return {evs, 0.0, diss};
+};
+
+// Advance one element from (eps0, ev0) to eps1 over dt (decay and slack_decay as in
+// ZenerStepper; kept for callers that step with varying dt).
+template <class R>
+inline ZenerStep zener_update(const ZenerConstants& c, R eps0, R eps1, R ev0, double dt, double /*decay*/,
+                              double /*slack_decay*/) {
+  return ZenerStepper(c, dt).step(double(eps0), double(eps1), double(ev0));
 }
 
 // Stored energy per unit volume.

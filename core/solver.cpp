@@ -37,7 +37,8 @@ class SolverT final : public Solver {
  public:
   using V3 = Eigen::Matrix<Real, 3, 1>;
 
-  SolverT(const Model& m, int threads) : Solver(m) {
+  SolverT(const Model& m, int threads)
+      : Solver(m), zener_(ZenerConstants{m.k1 > 0 ? m.k1 : 1, m.k2 > 0 ? m.k2 : 1, m.damping > 0 ? m.damping : 1}, m.dt) {
     const int n = model_.node_count, ne = model_.element_count;
     x_.resize(n);
     v_.resize(n);
@@ -86,10 +87,6 @@ class SolverT final : public Solver {
     }
     xp_ = model_.projectile_x0.cast<Real>();
     vp_ = (model_.impact_velocity * model_.flight_dir).cast<Real>();
-    const ZenerConstants zc{model_.k1, model_.k2, model_.damping};
-    zener_ = zc;
-    decay_ = model_.material == Material::zener ? std::exp(-model_.dt / zc.tau()) : 1.0;
-    slack_decay_ = model_.material == Material::zener ? std::exp(-model_.dt * zc.k2 / zc.mu) : 1.0;
     set_threads(threads);
     // Initial ledger: all energy is the projectile's.
     ke_half_ = 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
@@ -211,10 +208,10 @@ class SolverT final : public Solver {
       const double vol = model_.elem_area[e] * rest;
       double sig, u, dd = 0;
       if (zener) {
-        const ZenerStep zs = zener_update(zener_, prev_strain_[e], eps, ev_[e], model_.dt, decay_, slack_decay_);
+        const ZenerStep zs = zener_.step(double(prev_strain_[e]), double(eps), double(ev_[e]));
         ev_[e] = Real(zs.ev);
         sig = zs.stress;
-        u = zener_stored(zener_, sig, zs.ev) * vol;
+        u = zener_stored(zener_.c, sig, zs.ev) * vol;
         dd = zs.dissipated * vol;
       } else {
         sig = eps > 0 ? E * double(eps) : 0.0;
@@ -336,12 +333,13 @@ class SolverT final : public Solver {
     const int n = model_.node_count;
     const Real dt = Real(model_.dt);
     double maxr2 = 0;
-    v_prev_ = v_;
-    std::fill(dv_contact_.begin(), dv_contact_.end(), V3::Zero());
-    std::fill(dv_friction_.begin(), dv_friction_.end(), V3::Zero());
-    std::fill(dv_pfriction_.begin(), dv_pfriction_.end(), V3::Zero());
+
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) if (threads_ > 1)
     for (int i = 0; i < n; ++i) {
+      v_prev_[i] = v_[i];
+      dv_contact_[i].setZero();
+      dv_friction_[i].setZero();
+      dv_pfriction_[i].setZero();
       const std::uint8_t fx = model_.fixed[i];
       if (fx == fix_all) continue;
       V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
@@ -398,20 +396,6 @@ class SolverT final : public Solver {
       if (arc >= 0) ++s, frac = 0;
       else --s, frac = 1;
     }
-  }
-
-  // Work of a correction in the leapfrog's own energy statement. With v- = v(t-dt/2) and
-  // v+ = v(t+dt/2) after all corrections, KE(v+) - KE(v-) = sum over forces F of
-  // F . (dx(t-dt/2) + dx(t+dt/2)) / 2 exactly; a correction dv is a force m dv/dt, so its
-  // work is m dv . (v- + v+) / 2. (Booking the bare kinetic-energy change of each correction
-  // instead would count, every step, energy a resting contact never takes.)
-  double correction_work(const std::vector<V3>& acc) const {
-    double w = 0;
-    for (int i = 0; i < model_.node_count; ++i) {
-      if (acc[i].isZero()) continue;
-      w += 0.5 * model_.mass[i] * double(acc[i].dot(v_prev_[i] + v_[i]));
-    }
-    return w;
   }
 
   // Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
@@ -523,18 +507,17 @@ class SolverT final : public Solver {
   // Is the contact point at an end of the yarn beyond which it has no segment, with the
   // partner lying beyond that end? Then the partner has slipped off (ravelled out).
   bool slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
+    const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
+                        !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
+    const bool at_start = frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) &&
+                          !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
+    if (!at_end && !at_start) return false;
     const V3 t = x_[ynode(yarn, seg + 1)] - x_[ynode(yarn, seg)];
     const Real L = t.norm();
     if (L <= Real(0)) return false;
     const Real along = toward_partner.dot(t) / L;
     const Real dist = toward_partner.norm();
-    const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
-                        !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
-    const bool at_start = frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) &&
-                          !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
-    if (at_end && along > Real(0.5) * dist) return true;
-    if (at_start && -along > Real(0.5) * dist) return true;
-    return false;
+    return at_end ? along > Real(0.5) * dist : -along > Real(0.5) * dist;
   }
 
   // Material coordinate (node index + fraction) of point p along a yarn near node k:
@@ -847,11 +830,28 @@ class SolverT final : public Solver {
     return ke;
   }
 
+  // Kinetic energy of v(t + dt/2) and the work of this step's corrections, in one sweep.
+  // Work of a correction in the leapfrog's own energy statement: with v- = v(t - dt/2) and
+  // v+ = v(t + dt/2) after all corrections, KE(v+) - KE(v-) = sum over forces F of
+  // F . (dx(t - dt/2) + dx(t + dt/2)) / 2 exactly; a correction dv is a force m dv/dt, so
+  // its work is m dv . (v- + v+) / 2. (Booking the bare kinetic-energy change of each
+  // correction instead would count, every step, energy a resting contact never takes.)
   void finish_step() {
-    contact_cum_ -= correction_work(dv_contact_);
-    friction_cum_ -= correction_work(dv_friction_);
-    pfriction_cum_ -= correction_work(dv_pfriction_);
-    ke_fabric_half_ = fabric_ke();
+    double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0;
+    const int n = model_.node_count;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction) if (threads_ > 1)
+    for (int i = 0; i < n; ++i) {
+      const double hm = 0.5 * model_.mass[i];
+      ke += hm * double(v_[i].squaredNorm());
+      const V3 vsum = v_prev_[i] + v_[i];
+      w_contact += hm * double(dv_contact_[i].dot(vsum));
+      w_friction += hm * double(dv_friction_[i].dot(vsum));
+      w_pfriction += hm * double(dv_pfriction_[i].dot(vsum));
+    }
+    contact_cum_ -= w_contact;
+    friction_cum_ -= w_friction;
+    pfriction_cum_ -= w_pfriction;
+    ke_fabric_half_ = ke;
     ke_half_ = ke_fabric_half_ + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
     time_ += model_.dt;
     ++steps_;
@@ -869,8 +869,7 @@ class SolverT final : public Solver {
 
  private:
   int threads_ = 1;
-  ZenerConstants zener_{1, 1, 1};
-  double decay_ = 1, slack_decay_ = 1;
+  ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
   std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_;  // this step's corrections, per mechanism
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
