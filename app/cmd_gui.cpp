@@ -1,0 +1,595 @@
+// `ravel gui [SCENE] [--set k=v ...]`: the interactive app. GLFW window, Dear ImGui and
+// all GL on this (the main) thread; the simulation on SimWorker's std::thread
+// (app/sim_worker.h). Each UI frame: poll events, sync() the worker's last published
+// step into the UI's own copy under a short lock, lay out the panels, draw the fabric
+// from that copy with render::Renderer into the 3D view, draw ImGui on top, swap.
+//
+// For tests and picture export the app can drive itself:
+//   --frames N             quit after N frames (exit 0)
+//   --screenshot FILE      PNG of the whole window (UI included) at the last frame
+//   --do FRAME:ACTION      at UI frame FRAME do ACTION (repeatable): play, pause, step,
+//                          reset, restart, clear, fast, slow:US_PER_S, set:KEY=VALUE
+//                          (edit a panel value), view:NAME, field:NAME, screenshot:FILE,
+//                          export-results, export-scene (into --export-dir)
+//   --pause-at-us T        pause the run when simulated time reaches T; with --frames the
+//                          app keeps going past frame N until then (for reproducible pictures)
+//   --paused               open paused at t = 0
+//   --view / --field       initial camera preset / colour field
+//   --size WxH             window size (default 1600x1000)
+//   --export-dir DIR       the Export panel's folder (default ./ravel_export)
+#include <glad/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <cstdint>
+#include <map>
+
+#include "cli.h"
+#include "commands.h"
+#include "gui_app.h"
+#include "render/renderer.h"
+#include "results.h"
+#include "sim_worker.h"
+
+namespace ravel::app {
+
+namespace {
+
+using gui::GuiApp;
+
+std::string g_glfw_error;
+void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "?"; }
+void* glfw_loader(const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); }
+
+struct ScriptAction {
+  std::string action, arg;
+};
+
+std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& items) {
+  std::multimap<long, ScriptAction> script;
+  for (const auto& item : items) {
+    const auto colon = item.find(':');
+    char* end = nullptr;
+    const long frame = colon == std::string::npos ? -1 : std::strtol(item.c_str(), &end, 10);
+    if (colon == std::string::npos || end != item.c_str() + colon || frame < 0)
+      throw UsageError("--do: expected FRAME:ACTION, got '" + item + "'");
+    ScriptAction a;
+    a.action = item.substr(colon + 1);
+    if (const auto c2 = a.action.find(':'); c2 != std::string::npos) {
+      a.arg = a.action.substr(c2 + 1);
+      a.action = a.action.substr(0, c2);
+    }
+    static const char* known[] = {"play", "pause", "step", "reset", "restart", "clear", "fast", "slow",
+                                  "set", "view", "field", "screenshot", "export-results", "export-scene"};
+    if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return a.action == k; }) ==
+        std::end(known))
+      throw UsageError("--do: unknown action '" + a.action +
+                       "' (play, pause, step, reset, restart, clear, fast, slow:RATE, set:KEY=VALUE, "
+                       "view:NAME, field:NAME, screenshot:FILE, export-results, export-scene)");
+    script.emplace(frame, a);
+  }
+  return script;
+}
+
+void apply_script_action(GuiApp& app, const ScriptAction& a) {
+  SimWorker& w = *app.worker;
+  if (a.action == "play") w.play();
+  else if (a.action == "pause") w.pause();
+  else if (a.action == "step") w.step_once(a.arg.empty() ? 1 : std::max(1, std::atoi(a.arg.c_str())));
+  else if (a.action == "reset") w.reset();
+  else if (a.action == "restart") gui::restart_with_draft(app);
+  else if (a.action == "clear") w.clear_past_runs();
+  else if (a.action == "fast") {
+    app.pacing.max_speed = true;
+    w.set_pacing(app.pacing);
+  } else if (a.action == "slow") {
+    app.pacing.max_speed = false;
+    if (!a.arg.empty()) app.pacing.sim_us_per_wall_s = std::max(1e-3, std::atof(a.arg.c_str()));
+    w.set_pacing(app.pacing);
+  } else if (a.action == "set") {
+    gui::set_draft_value(app, a.arg);
+  } else if (a.action == "view") {
+    if (!render::parse_view_preset(a.arg, &app.view_options.view))
+      throw UsageError("--do view: unknown view '" + a.arg + "'");
+    app.camera_needs_fit = true;
+  } else if (a.action == "field") {
+    if (!render::parse_color_field(a.arg, &app.view_options.field))
+      throw UsageError("--do field: unknown field '" + a.arg + "'");
+  } else if (a.action == "export-results") {
+    gui::export_results(app);
+  } else if (a.action == "export-scene") {
+    gui::export_scene(app);
+  } else if (a.action == "screenshot") {
+    app.screenshot_requested = true;
+    app.screenshot_path = a.arg.empty() ? gui::next_screenshot_path(app) : a.arg;
+  }
+}
+
+// The whole window as it is in the back buffer (UI included), written as a PNG.
+bool save_screenshot(const std::string& path, int w, int h, std::string* error) {
+  std::vector<std::uint8_t> rgb(size_t(w) * size_t(h) * 3), flipped(rgb.size());
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  glReadBuffer(GL_BACK);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+  for (int y = 0; y < h; ++y)
+    std::copy_n(rgb.begin() + long(y) * w * 3, size_t(w) * 3, flipped.begin() + long(h - 1 - y) * w * 3);
+  const auto parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+  }
+  return render::write_png(path, w, h, flipped, error);
+}
+
+void setup_style(float scale) {
+  ImGuiStyle& st = ImGui::GetStyle();
+  ImGui::StyleColorsDark(&st);
+  st.WindowRounding = 0;
+  st.FrameRounding = 3;
+  st.GrabRounding = 3;
+  st.WindowBorderSize = 0;
+  st.WindowPadding = ImVec2(12, 10);
+  st.FramePadding = ImVec2(7, 4);
+  st.ItemSpacing = ImVec2(8, 6);
+  st.ItemInnerSpacing = ImVec2(6, 4);
+  st.ScrollbarSize = 12;
+  ImVec4* c = st.Colors;
+  c[ImGuiCol_WindowBg] = ImVec4(0.105f, 0.115f, 0.135f, 1.0f);
+  c[ImGuiCol_Header] = ImVec4(0.22f, 0.26f, 0.33f, 1.0f);
+  c[ImGuiCol_HeaderHovered] = ImVec4(0.28f, 0.34f, 0.44f, 1.0f);
+  c[ImGuiCol_HeaderActive] = ImVec4(0.32f, 0.40f, 0.52f, 1.0f);
+  c[ImGuiCol_FrameBg] = ImVec4(0.17f, 0.19f, 0.23f, 1.0f);
+  c[ImGuiCol_Button] = ImVec4(0.22f, 0.28f, 0.38f, 1.0f);
+  c[ImGuiCol_ButtonHovered] = ImVec4(0.30f, 0.38f, 0.52f, 1.0f);
+  c[ImGuiCol_ButtonActive] = ImVec4(0.36f, 0.46f, 0.62f, 1.0f);
+  c[ImGuiCol_SliderGrab] = ImVec4(0.95f, 0.62f, 0.20f, 0.9f);
+  c[ImGuiCol_SliderGrabActive] = ImVec4(1.0f, 0.70f, 0.30f, 1.0f);
+  c[ImGuiCol_CheckMark] = ImVec4(0.95f, 0.62f, 0.20f, 1.0f);
+  c[ImGuiCol_PlotHistogram] = ImVec4(0.30f, 0.55f, 0.85f, 1.0f);
+  st.ScaleAllSizes(scale);
+}
+
+void load_font(float size_px) {
+  ImGuiIO& io = ImGui::GetIO();
+  static const char* candidates[] = {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+                                     "/usr/share/fonts/TTF/DejaVuSans.ttf"};
+  for (const char* path : candidates)
+    if (std::filesystem::exists(path) && io.Fonts->AddFontFromFileTTF(path, size_px)) return;
+  // Without DejaVu: ImGui's built-in 13 px font, scaled.
+  io.Fonts->AddFontDefault();
+  io.FontGlobalScale = size_px / 13.0f;
+}
+
+// Mouse and keyboard in the 3D view and the global shortcuts.
+void handle_input(GuiApp& app) {
+  const ImGuiIO& io = ImGui::GetIO();
+  const ImVec2 m = io.MousePos;
+  const bool in_view = m.x >= app.view_x && m.x < app.view_x + app.view_w && m.y >= app.view_y &&
+                       m.y < app.view_y + app.view_h;
+  if (!io.WantCaptureMouse && in_view) {
+    if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) app.camera_needs_fit = true;
+    if (io.MouseWheel != 0) app.camera.zoom(std::pow(0.88f, io.MouseWheel));
+  }
+  // Drags that started in the view keep going even if the mouse leaves it.
+  static bool dragging = false;
+  const bool any_down = ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2);
+  if (!any_down) dragging = false;
+  if (any_down && !dragging && !io.WantCaptureMouse && in_view &&
+      (ImGui::IsMouseClicked(0) || ImGui::IsMouseClicked(1) || ImGui::IsMouseClicked(2)))
+    dragging = true;
+  if (dragging) {
+    const ImVec2 d = io.MouseDelta;
+    const bool pan = ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2) || (ImGui::IsMouseDown(0) && io.KeyShift);
+    if (pan)
+      app.camera.pan(-d.x / std::max(1.0f, app.view_h), d.y / std::max(1.0f, app.view_h));
+    else if (ImGui::IsMouseDown(0))
+      app.camera.orbit(-d.x * 0.35f, d.y * 0.35f);
+  }
+  if (io.WantCaptureKeyboard) return;
+  SimWorker& w = *app.worker;
+  if (ImGui::IsKeyPressed(GLFW_KEY_SPACE, false)) w.toggle_pause();
+  if (ImGui::IsKeyPressed(GLFW_KEY_S) || ImGui::IsKeyPressed(GLFW_KEY_RIGHT)) w.step_once(1);
+  if (ImGui::IsKeyPressed(GLFW_KEY_R, false)) w.reset();
+  if (ImGui::IsKeyPressed(GLFW_KEY_ENTER, false) || ImGui::IsKeyPressed(GLFW_KEY_KP_ENTER, false))
+    gui::restart_with_draft(app);
+  if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) app.camera_needs_fit = true;
+  if (ImGui::IsKeyPressed(GLFW_KEY_C, false)) w.clear_past_runs();
+  if (ImGui::IsKeyPressed(GLFW_KEY_P, false)) {
+    app.screenshot_requested = true;
+    app.screenshot_path = gui::next_screenshot_path(app);
+  }
+  for (int i = 0; i < 4; ++i)
+    if (ImGui::IsKeyPressed(GLFW_KEY_1 + i, false)) {
+      app.view_options.view = render::ViewPreset(i);
+      app.camera_needs_fit = true;
+    }
+  if (ImGui::IsKeyPressed(GLFW_KEY_F1, false) || ImGui::IsKeyPressed(GLFW_KEY_H, false))
+    app.show_help = !app.show_help;
+}
+
+void draw_help(GuiApp& app) {
+  if (!app.show_help) return;
+  ImGui::SetNextWindowPos(ImVec2(app.view_x + app.view_w * 0.5f, app.view_y + app.view_h * 0.5f),
+                          ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+  ImGui::Begin("Keys and mouse", &app.show_help,
+               ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoMove);
+  const char* rows[][2] = {{"Space", "play / pause"},
+                           {"S or Right", "one time step"},
+                           {"R", "reset to t = 0"},
+                           {"Enter", "restart with the edited values"},
+                           {"1 2 3 4", "oblique / top / back / section view"},
+                           {"F, double-click", "fit the fabric in the view"},
+                           {"left drag", "orbit"},
+                           {"right drag, shift+left drag", "pan"},
+                           {"wheel", "zoom"},
+                           {"C", "clear the earlier runs from the charts"},
+                           {"P", "screenshot into the export folder"},
+                           {"H or F1", "this help"}};
+  if (ImGui::BeginTable("keys", 2)) {
+    for (auto& r : rows) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextColored(ImVec4(0.95f, 0.62f, 0.20f, 1.0f), "%s", r[0]);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r[1]);
+    }
+    ImGui::EndTable();
+  }
+  ImGui::End();
+}
+
+// The 3D view is drawn into a texture and redrawn only when something changed: a new
+// frame from the worker, the camera, the view options, the size. Drawing the whole fabric
+// costs tens of milliseconds under a software GL, so while the run plays a new frame is
+// drawn at most at a rate that leaves most of each second to the UI (panels, charts and
+// input stay at 30+ fps); camera moves redraw at once, with thinner tubes while the mouse
+// drags or the run plays, and full quality once everything is still.
+class ViewCache {
+ public:
+  ~ViewCache() { release(); }
+
+  void release() {
+    if (fbo_) glDeleteFramebuffers(1, &fbo_);
+    if (color_) glDeleteTextures(1, &color_);
+    if (depth_) glDeleteRenderbuffers(1, &depth_);
+    fbo_ = color_ = depth_ = 0;
+    w_ = h_ = 0;
+  }
+
+  // Redraw if needed; `force_hq` for screenshots. Returns true if it drew.
+  bool update(render::Renderer& renderer, const GuiApp& app, int w, int h, float ui_scale, bool busy,
+              bool force_hq) {
+    using Clock = std::chrono::steady_clock;
+    const auto now = Clock::now();
+    if (w != w_ || h != h_) resize(w, h);
+    const std::string key = view_key(app);
+    const bool new_frame = app.view.frame_serial != drawn_serial_;
+    const bool view_changed = key != drawn_key_;
+    if (busy || new_frame || view_changed) last_change_ = now;
+    const bool still = now - last_change_ > std::chrono::milliseconds(250);
+    // Budget: at most about a third of wall time on the fabric while a run plays.
+    const auto min_gap = std::chrono::duration<double, std::milli>(std::max(50.0, 2.0 * last_ms_));
+    bool draw = !valid_ || view_changed || force_hq;
+    if (!draw && new_frame && now - last_draw_ >= min_gap) draw = true;
+    if (!draw && still && !hq_) draw = true;  // settle to full quality
+    if (!draw || app.view.frame.node_pos.empty()) return false;
+
+    const bool hq = force_hq || (still && !busy && !new_frame && !view_changed) ||
+                    (!busy && app.view.state != WorkerState::running && !new_frame);
+    render::ViewOptions o = app.view_options;
+    o.ui_scale = ui_scale;
+    o.tube_sides = hq ? std::max(8, o.tube_sides) : 4;
+    const auto t0 = Clock::now();
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    renderer.draw(app.view.frame, app.camera, o, 0, 0, w_, h_);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glFinish();  // make the cost visible here, where it is budgeted
+    last_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    last_draw_ = Clock::now();
+    drawn_serial_ = app.view.frame_serial;
+    drawn_key_ = key;
+    hq_ = hq;
+    valid_ = true;
+    ++draws_;
+    return true;
+  }
+
+  unsigned texture() const { return color_; }
+  bool valid() const { return valid_; }
+  double last_ms() const { return last_ms_; }
+  long draws() const { return draws_; }
+
+ private:
+  static std::string view_key(const GuiApp& app) {
+    const render::Camera& c = app.camera;
+    const render::ViewOptions& o = app.view_options;
+    char b[256];
+    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g", c.target[0], c.target[1],
+                  c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view), int(o.field),
+                  int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption,
+                  o.show_colorbar, o.range_min, o.range_max);
+    return b;
+  }
+
+  void resize(int w, int h) {
+    release();
+    w_ = w;
+    h_ = h;
+    glGenTextures(1, &color_);
+    glBindTexture(GL_TEXTURE_2D, color_);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glGenRenderbuffers(1, &depth_);
+    glBindRenderbuffer(GL_RENDERBUFFER, depth_);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
+    glGenFramebuffers(1, &fbo_);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color_, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    valid_ = false;
+  }
+
+  GLuint fbo_ = 0, color_ = 0, depth_ = 0;
+  int w_ = 0, h_ = 0;
+  bool valid_ = false, hq_ = false;
+  std::uint64_t drawn_serial_ = ~std::uint64_t(0);
+  std::string drawn_key_;
+  std::chrono::steady_clock::time_point last_draw_{}, last_change_{};
+  double last_ms_ = 0;
+  long draws_ = 0;
+};
+
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(assets_dir() + "/scenes", ec))
+    if (e.path().extension() == ".toml") out.push_back(e.path().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+int cmd_gui(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"frames", "screenshot", "do", "pause-at-us", "view", "field", "size", "export-dir"},
+                              {"paused"}, {"do"});
+    long frames = -1;
+    if (a.flags.count("frames")) {
+      char* end = nullptr;
+      frames = std::strtol(a.flags["frames"].c_str(), &end, 10);
+      if (a.flags["frames"].empty() || *end || frames < 1)
+        throw UsageError("--frames: expected a whole number >= 1, got '" + a.flags["frames"] + "'");
+    }
+    const std::string screenshot = a.flags.count("screenshot") ? a.flags["screenshot"] : "";
+    if (!screenshot.empty() && frames < 0) throw UsageError("--screenshot needs --frames N");
+    const auto script = parse_script(a.multi.count("do") ? a.multi["do"] : std::vector<std::string>{});
+    double pause_at_us = -1;
+    if (a.flags.count("pause-at-us")) {
+      char* end = nullptr;
+      pause_at_us = std::strtod(a.flags["pause-at-us"].c_str(), &end);
+      if (*end || !(pause_at_us > 0)) throw UsageError("--pause-at-us: expected a time in microseconds > 0");
+    }
+    render::ViewOptions view_options;
+    if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &view_options.view))
+      throw UsageError("--view: expected oblique, top, back or section, got '" + a.flags["view"] + "'");
+    if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &view_options.field))
+      throw UsageError("--field: expected strain, velocity or sliding, got '" + a.flags["field"] + "'");
+    int win_w = 1600, win_h = 1000;
+    if (a.flags.count("size")) {
+      char x = 0, rest = 0;
+      if (std::sscanf(a.flags["size"].c_str(), "%d%c%d%c", &win_w, &x, &win_h, &rest) != 3 || x != 'x' ||
+          win_w < 640 || win_h < 480 || win_w > 8192 || win_h > 8192)
+        throw UsageError("--size: expected WxH of at least 640x480, got '" + a.flags["size"] + "'");
+    }
+    Scene scene = load_scene_from(a);
+
+    // No display: say so in one line and point to the headless commands.
+    const char* display = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    if ((!display || !*display) && (!wayland || !*wayland)) {
+      std::fprintf(stderr,
+                   "ravel: no display (DISPLAY is not set), so no window; for headless work use "
+                   "'ravel run --out DIR' or 'ravel snapshot --at T_US --out DIR'\n");
+      return exit_usage;
+    }
+    glfwSetErrorCallback(on_glfw_error);
+    if (!glfwInit()) {
+      std::fprintf(stderr,
+                   "ravel: cannot open the display (%s); for headless work use 'ravel run --out DIR' "
+                   "or 'ravel snapshot --at T_US --out DIR'\n",
+                   g_glfw_error.c_str());
+      return exit_usage;
+    }
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    // No multisampling: under a software GL (llvmpipe) it multiplies the fabric's cost.
+    glfwWindowHint(GLFW_SAMPLES, 0);
+    const std::string title = "ravel \xE2\x80\x94 " + scene.name;
+    GLFWwindow* window = glfwCreateWindow(win_w, win_h, title.c_str(), nullptr, nullptr);
+    if (!window) {
+      std::fprintf(stderr, "ravel: cannot create an OpenGL 3.3 core window (%s); use 'ravel run' or 'ravel snapshot'\n",
+                   g_glfw_error.c_str());
+      glfwTerminate();
+      return exit_failure;
+    }
+    glfwMakeContextCurrent(window);
+    glfwSwapInterval(frames > 0 ? 0 : 1);
+    std::string gl_error;
+    if (!render::load_gl(glfw_loader, &gl_error)) {
+      std::fprintf(stderr, "ravel: cannot load OpenGL: %s\n", gl_error.c_str());
+      glfwDestroyWindow(window);
+      glfwTerminate();
+      return exit_failure;
+    }
+
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; no imgui.ini next to the user's files
+    float xscale = 1, yscale = 1;
+    glfwGetWindowContentScale(window, &xscale, &yscale);
+    const float ui_scale = std::clamp(xscale, 1.0f, 3.0f);
+    load_font(16.0f * ui_scale);
+    setup_style(ui_scale);
+    ImGui_ImplGlfw_InitForOpenGL(window, true);
+    ImGui_ImplOpenGL3_Init("#version 330 core");
+
+    int exit_code = exit_ok;
+    {
+      render::Renderer renderer;
+      SimWorker worker(scene, has_switch(a, "paused"));
+      GuiApp app;
+      app.worker = &worker;
+      app.draft = scene;
+      app.view_options = view_options;
+      app.camera = render::Camera::preset(view_options.view);
+      app.shipped_scenes = shipped_scenes();
+      if (a.flags.count("export-dir")) app.export_dir = a.flags["export-dir"];
+      if (pause_at_us > 0) {
+        app.pause_at_us = pause_at_us;
+        worker.pause_at(pause_at_us * 1e-6);
+      }
+      worker.sync(app.view);
+
+      ViewCache view_cache;
+      const auto t0 = std::chrono::steady_clock::now();
+      auto last_frame_end = t0;
+      double worst_frame_ms = 0, view_ms_total = 0;
+      long frame = 0;
+      double sim_at_end_us = 0;
+      while (!glfwWindowShouldClose(window) && !app.quit) {
+        const auto frame_start = std::chrono::steady_clock::now();
+        glfwPollEvents();
+        ++frame;
+        for (auto [it, end] = script.equal_range(frame); it != end; ++it) apply_script_action(app, it->second);
+        worker.sync(app.view);
+
+        int fb_w = 0, fb_h = 0, win_w_now = 0, win_h_now = 0;
+        glfwGetFramebufferSize(window, &fb_w, &fb_h);
+        glfwGetWindowSize(window, &win_w_now, &win_h_now);
+        if (fb_w <= 0 || fb_h <= 0) {  // minimised
+          glfwWaitEventsTimeout(0.1);
+          continue;
+        }
+        ImGui_ImplOpenGL3_NewFrame();
+        ImGui_ImplGlfw_NewFrame();
+        ImGui::NewFrame();
+        const ImVec2 ds = ImGui::GetIO().DisplaySize;
+        app.left_w = std::clamp(ds.x * 0.25f, 330.0f * ui_scale, 420.0f * ui_scale);
+        app.bottom_h = std::clamp(ds.y * 0.36f, 250.0f * ui_scale, 400.0f * ui_scale);
+        app.status_w = std::clamp(ds.x * 0.21f, 300.0f * ui_scale, 380.0f * ui_scale);
+        app.view_x = app.left_w;
+        app.view_y = 0;
+        app.view_w = std::max(1.0f, ds.x - app.left_w);
+        app.view_h = std::max(1.0f, ds.y - app.bottom_h);
+        app.fps = ImGui::GetIO().Framerate;
+
+        handle_input(app);
+        const bool dragging = !ImGui::GetIO().WantCaptureMouse &&
+                              (ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2));
+        gui::draw_left_panel(app);
+        gui::draw_charts_panel(app);
+        gui::draw_status_panel(app);
+        draw_help(app);
+
+        // The 3D view: the renderer draws the UI's copy of the frame into the cached
+        // texture (when due), which ImGui then shows behind the panels.
+        const float sx = float(fb_w) / float(std::max(1, win_w_now)), sy = float(fb_h) / float(std::max(1, win_h_now));
+        const int vw = std::max(1, int(app.view_w * sx)), vh = std::max(1, int(app.view_h * sy));
+        if (app.camera_needs_fit && !app.view.frame.node_pos.empty()) {
+          app.camera = render::fitted_camera(app.view.frame, app.view_options.view, float(vw) / float(vh));
+          app.camera_needs_fit = false;
+        }
+        const bool shot_due = app.screenshot_requested ||
+                              (frames > 0 && frame >= frames && !screenshot.empty());
+        const auto v0 = std::chrono::steady_clock::now();
+        view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
+                          shot_due);
+        view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
+        if (view_cache.valid())
+          ImGui::GetBackgroundDrawList()->AddImage(
+              reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(view_cache.texture())),
+              ImVec2(app.view_x, app.view_y), ImVec2(app.view_x + app.view_w, app.view_y + app.view_h),
+              ImVec2(0, 1), ImVec2(1, 0));
+        ImGui::Render();
+        glViewport(0, 0, fb_w, fb_h);
+        glClearColor(0.105f, 0.115f, 0.135f, 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+        const auto now = std::chrono::steady_clock::now();
+        const double frame_ms = std::chrono::duration<double, std::milli>(now - last_frame_end).count();
+        last_frame_end = now;
+        if (frame > 1) worst_frame_ms = std::max(worst_frame_ms, frame_ms);
+        const bool last = frames > 0 && frame >= frames &&
+                          (pause_at_us <= 0 || app.view.state != WorkerState::running ||
+                           std::chrono::steady_clock::now() - t0 > std::chrono::seconds(120));
+        if (last && !screenshot.empty()) {
+          app.screenshot_requested = true;
+          app.screenshot_path = screenshot;
+        }
+        if (app.screenshot_requested) {
+          app.screenshot_requested = false;
+          std::string error;
+          if (save_screenshot(app.screenshot_path, fb_w, fb_h, &error)) {
+            app.notice = "wrote " + app.screenshot_path;
+            app.notice_is_error = false;
+          } else {
+            app.notice = "screenshot failed: " + error;
+            app.notice_is_error = true;
+            if (last) exit_code = exit_failure;
+          }
+        }
+        glfwSwapBuffers(window);
+        if (last) {
+          sim_at_end_us = app.view.frame.time_s * 1e6;
+          break;
+        }
+        // At most ~60 UI frames a second: a software GL would otherwise take the core
+        // the solver needs. Input wakes the loop early.
+        const double spent_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - frame_start).count();
+        if (spent_s < 1.0 / 60.0) glfwWaitEventsTimeout(1.0 / 60.0 - spent_s);
+      }
+      if (frames > 0) {
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::printf(
+            "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms), 3D view drawn %ld times "
+            "(%.0f ms each), simulated time %.2f us, run %ld %s, mu %.2f\n",
+            frame, wall, double(frame) / wall, worst_frame_ms, view_cache.draws(),
+            view_ms_total / double(std::max(1L, view_cache.draws())), sim_at_end_us, app.view.run_id,
+            to_string(app.view.state), app.view.scene.yarn.friction);
+        if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
+      }
+      worker.request_exit();
+      view_cache.release();
+    }  // worker joined, renderer destroyed with the context current
+
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    glfwDestroyWindow(window);
+    glfwTerminate();
+    return exit_code;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+}  // namespace ravel::app

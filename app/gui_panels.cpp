@@ -1,0 +1,523 @@
+// The app's panels: run controls, scene editor, view, export, charts, status.
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "gui_app.h"
+#include "gui_charts.h"
+#include "results.h"
+
+namespace ravel::app::gui {
+
+namespace {
+
+const ImVec4 kAccent(0.95f, 0.62f, 0.20f, 1.0f);
+const ImVec4 kGood(0.45f, 0.85f, 0.45f, 1.0f);
+const ImVec4 kWarn(1.0f, 0.80f, 0.30f, 1.0f);
+const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
+
+// A double kept in SI, edited in display units (display = si * scale).
+bool slider_si(const char* label, double* si, double scale, double lo, double hi, const char* fmt,
+               bool log = false) {
+  double v = *si * scale;
+  const bool changed = ImGui::SliderScalar(label, ImGuiDataType_Double, &v, &lo, &hi, fmt,
+                                           log ? ImGuiSliderFlags_Logarithmic : 0);
+  if (changed) *si = v / scale;
+  return changed;
+}
+
+bool input_si(const char* label, double* si, double scale, const char* fmt) {
+  double v = *si * scale;
+  const bool changed = ImGui::InputDouble(label, &v, 0, 0, fmt, ImGuiInputTextFlags_EnterReturnsTrue);
+  if (changed) *si = v / scale;
+  return changed;
+}
+
+void help_marker(const char* text) {
+  ImGui::SameLine();
+  ImGui::TextDisabled("(?)");
+  if (ImGui::IsItemHovered()) {
+    ImGui::BeginTooltip();
+    ImGui::PushTextWrapPos(ImGui::GetFontSize() * 28.0f);
+    ImGui::TextUnformatted(text);
+    ImGui::PopTextWrapPos();
+    ImGui::EndTooltip();
+  }
+}
+
+// The run-relevant text of a scene, to tell whether the draft differs from the run.
+std::string run_key(Scene s) {
+  s.solver.threads = 0;  // applied live, not a restart
+  s.warnings.clear();
+  s.source.clear();
+  return scene_to_toml(s);
+}
+
+void set_notice(GuiApp& app, const std::string& text, bool error) {
+  app.notice = text;
+  app.notice_is_error = error;
+}
+
+bool accent_button(const char* label, bool accent, ImVec2 size = ImVec2(0, 0)) {
+  if (accent) {
+    ImGui::PushStyleColor(ImGuiCol_Button, ImVec4(0.78f, 0.45f, 0.10f, 1.0f));
+    ImGui::PushStyleColor(ImGuiCol_ButtonHovered, ImVec4(0.90f, 0.55f, 0.15f, 1.0f));
+    ImGui::PushStyleColor(ImGuiCol_ButtonActive, ImVec4(0.98f, 0.62f, 0.20f, 1.0f));
+  }
+  const bool pressed = ImGui::Button(label, size);
+  if (accent) ImGui::PopStyleColor(3);
+  return pressed;
+}
+
+void run_controls(GuiApp& app) {
+  SimWorker& w = *app.worker;
+  const float fs = ImGui::GetFontSize();
+  const float full = ImGui::GetContentRegionAvail().x;
+  const float third = (full - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+  const bool finished = app.view.state == WorkerState::finished || app.view.state == WorkerState::diverged;
+  if (w.paused()) {
+    ImGui::BeginDisabled(finished);
+    if (accent_button("Play  [Space]", true, ImVec2(third, 0))) w.play();
+    ImGui::EndDisabled();
+  } else if (ImGui::Button("Pause  [Space]", ImVec2(third, 0))) {
+    w.pause();
+  }
+  ImGui::SameLine();
+  ImGui::BeginDisabled(finished);
+  if (ImGui::Button("Step  [S]", ImVec2(third, 0))) w.step_once(1);
+  ImGui::EndDisabled();
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Pause and advance one time step");
+  ImGui::SameLine();
+  if (ImGui::Button("Reset  [R]", ImVec2(third, 0))) w.reset();
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Back to t = 0 with the scene that is running");
+
+  const bool dirty = run_key(app.draft) != run_key(app.view.scene);
+  if (accent_button(dirty ? "Restart with new values  [Enter]" : "Restart  [Enter]", dirty, ImVec2(full, 0)))
+    restart_with_draft(app);
+  if (dirty) ImGui::TextColored(kAccent, "Edited values are not running yet.");
+  ImGui::Checkbox("Restart on every change", &app.auto_restart);
+  help_marker("What-if mode: each edit in the panels below restarts the run at once. "
+              "The run it replaces stays in the charts as a faint overlay.");
+
+  ImGui::Spacing();
+  bool pacing_changed = false;
+  if (ImGui::RadioButton("As fast as possible", app.pacing.max_speed)) {
+    app.pacing.max_speed = true;
+    pacing_changed = true;
+  }
+  ImGui::SameLine();
+  if (ImGui::RadioButton("Slow motion", !app.pacing.max_speed)) {
+    app.pacing.max_speed = false;
+    pacing_changed = true;
+  }
+  ImGui::BeginDisabled(app.pacing.max_speed);
+  ImGui::SetNextItemWidth(full - fs * 7.2f);
+  pacing_changed |= slider_si("\xC2\xB5s per second", &app.pacing.sim_us_per_wall_s, 1.0, 0.05, 50.0,
+                              "%.2f", true);
+  ImGui::EndDisabled();
+  if (pacing_changed) w.set_pacing(app.pacing);
+  ImGui::SetNextItemWidth(full - fs * 7.2f);
+  double pause_at = app.pause_at_us;
+  if (ImGui::InputDouble("pause at \xC2\xB5s", &pause_at, 0, 0, pause_at < 0 ? "off" : "%.2f",
+                         ImGuiInputTextFlags_EnterReturnsTrue)) {
+    app.pause_at_us = pause_at > 0 ? pause_at : -1;
+    w.pause_at(app.pause_at_us > 0 ? app.pause_at_us * 1e-6 : -1);
+  }
+  help_marker("Pause the run when simulated time reaches this value (Enter to apply; 0 = off).");
+}
+
+bool scene_section(GuiApp& app) {
+  Scene& s = app.draft;
+  bool changed = false;
+  if (!app.shipped_scenes.empty()) {
+    std::string current = s.name;
+    if (ImGui::BeginCombo("preset", current.c_str())) {
+      for (const auto& path : app.shipped_scenes) {
+        const std::string name = std::filesystem::path(path).stem().string();
+        if (ImGui::Selectable(name.c_str(), name == s.name)) {
+          try {
+            app.draft = load_scene(path);
+            changed = true;
+          } catch (const std::exception& e) {
+            app.scene_error = e.what();
+          }
+        }
+      }
+      ImGui::EndCombo();
+    }
+    help_marker("Fabric presets: the scenes shipped in assets/scenes. Loading one replaces every value below.");
+  }
+  changed |= slider_si("width (mm)", &s.fabric.width_m, 1e3, 5, 200, "%.1f");
+  changed |= slider_si("length (mm)", &s.fabric.length_m, 1e3, 5, 200, "%.1f");
+  help_marker("Fabric size. Larger fabrics have more nodes and step more slowly "
+              "(the default 120 x 120 mm is about 10,000 nodes in a quarter model).");
+  ImGui::TextUnformatted("clamped");
+  ImGui::SameLine();
+  changed |= ImGui::Checkbox("left", &s.fabric.clamped.left);
+  ImGui::SameLine();
+  changed |= ImGui::Checkbox("right", &s.fabric.clamped.right);
+  ImGui::SameLine();
+  changed |= ImGui::Checkbox("bottom", &s.fabric.clamped.bottom);
+  ImGui::SameLine();
+  changed |= ImGui::Checkbox("top", &s.fabric.clamped.top);
+  help_marker("left / right: x = -W/2, +W/2 (they hold the weft yarns); bottom / top: y = -L/2, +L/2 (the warp yarns).");
+  changed |= slider_si("failure strain (%)", &s.yarn.failure_strain, 100, 1.0, 10.0, "%.2f");
+  int mat = s.yarn.material == Material::zener ? 0 : 1;
+  if (ImGui::Combo("material", &mat, "Zener (viscoelastic)\0linear elastic\0")) {
+    s.yarn.material = mat == 0 ? Material::zener : Material::elastic;
+    changed = true;
+  }
+  if (s.yarn.material == Material::zener && ImGui::TreeNode("Zener constants")) {
+    changed |= input_si("K1 (GPa)", &s.yarn.k1_pa, 1e-9, "%.2f");
+    help_marker("Zener spring in series: the instantaneous modulus (Eq 23). Enter to apply.");
+    changed |= input_si("K2 (GPa)", &s.yarn.k2_pa, 1e-9, "%.2f");
+    help_marker("Zener spring of the Kelvin-Voigt unit (Eq 23). Enter to apply.");
+    changed |= input_si("mu_d (MPa s)", &s.yarn.damping_pa_s, 1e-6, "%.1f");
+    help_marker("Zener dashpot (Eq 23). Enter to apply.");
+    ImGui::TreePop();
+  } else if (s.yarn.material == Material::elastic) {
+    changed |= input_si("E (GPa)", &s.yarn.modulus_pa, 1e-9, "%.2f");
+  }
+  return changed;
+}
+
+bool projectile_section(GuiApp& app) {
+  ProjectileParams& p = app.draft.projectile;
+  bool changed = false;
+  int shape = int(p.shape);
+  if (ImGui::Combo("shape", &shape, "sphere\0flat-faced cylinder\0cone\0")) {
+    p.shape = ShapeKind(shape);
+    changed = true;
+  }
+  changed |= slider_si("diameter (mm)", &p.diameter_m, 1e3, 1, 30, "%.1f");
+  changed |= slider_si("mass (g)", &p.mass_kg, 1e3, 0.5, 50, "%.2f", true);
+  changed |= slider_si("velocity (m/s)", &p.velocity_mps, 1, 10, 1000, "%.0f", true);
+  ImGui::TextDisabled("impact energy %.1f J", 0.5 * p.mass_kg * p.velocity_mps * p.velocity_mps);
+  changed |= slider_si("friction mu_p", &p.friction, 1, 0, 1, "%.2f");
+  help_marker("Projectile-yarn Coulomb friction (Eq 20-22). The paper uses 0.27.");
+  return changed;
+}
+
+bool friction_section(GuiApp& app) {
+  bool changed = slider_si("yarn-yarn mu", &app.draft.yarn.friction, 1, 0, 1, "%.2f");
+  help_marker("Inter-yarn Coulomb friction (Eq 12-15). The paper studies 0 to 1; "
+              "0.2 absorbs the most energy at 260 m/s.");
+  for (double mu : {0.0, 0.1, 0.2, 0.4, 1.0}) {
+    char label[16];
+    std::snprintf(label, sizeof label, "%.1f", mu);
+    if (mu != 0.0) ImGui::SameLine();
+    if (ImGui::Button(label)) {
+      app.draft.yarn.friction = mu;
+      changed = true;
+    }
+  }
+  return changed;
+}
+
+bool solver_section(GuiApp& app) {
+  SolverParams& s = app.draft.solver;
+  bool changed = false;
+  int model = s.model == ContactModel::sliding ? 0 : 1;
+  if (ImGui::Combo("model", &model, "sliding (paper)\0pin-jointed\0")) {
+    s.model = model == 0 ? ContactModel::sliding : ContactModel::pin_jointed;
+    changed = true;
+  }
+  changed |= slider_si("dt factor", &s.dt_factor, 1, 0.05, 1.5, "%.2f");
+  help_marker("alpha of Eq 4: dt = alpha L / c. Above about 1 the explicit scheme is unstable "
+              "and the run will diverge (it pauses and says so).");
+  changed |= ImGui::SliderInt("contact iterations", &s.contact_iterations, 1, 10);
+  help_marker("N passes of the yarn contact correction per step (Eq 16-17).");
+  int sym = s.symmetry == SymmetryMode::automatic ? 0 : 1;
+  if (ImGui::Combo("symmetry", &sym, "auto (smallest model)\0full fabric\0")) {
+    s.symmetry = sym == 0 ? SymmetryMode::automatic : SymmetryMode::full;
+    changed = true;
+  }
+  int prec = s.precision == Precision::double_precision ? 0 : 1;
+  if (ImGui::Combo("precision", &prec, "double\0float\0")) {
+    s.precision = prec == 0 ? Precision::double_precision : Precision::single_precision;
+    changed = true;
+  }
+  changed |= slider_si("end time (\xC2\xB5s)", &s.end_time_s, 1e6, 5, 500, "%.0f");
+  int threads = s.threads;
+  if (ImGui::SliderInt("solver threads", &threads, 0, 8, threads == 0 ? "all cores" : "%d")) {
+    s.threads = threads;
+    app.worker->set_threads(threads);  // live: applied at the next step boundary
+  }
+  return changed;
+}
+
+void view_section(GuiApp& app) {
+  render::ViewOptions& o = app.view_options;
+  const char* names[] = {"Oblique", "Top", "Back", "Section"};
+  for (int i = 0; i < 4; ++i) {
+    if (i) ImGui::SameLine();
+    char label[32];
+    std::snprintf(label, sizeof label, "%s [%d]", names[i], i + 1);
+    if (accent_button(label, int(o.view) == i)) {
+      o.view = render::ViewPreset(i);
+      app.camera_needs_fit = true;
+    }
+  }
+  if (ImGui::Button("Fit [F]")) app.camera_needs_fit = true;
+  ImGui::SameLine();
+  ImGui::TextDisabled("drag: orbit, right-drag: pan, wheel: zoom");
+  int field = int(o.field);
+  ImGui::TextUnformatted("colour");
+  ImGui::SameLine();
+  if (ImGui::RadioButton("strain", field == 0)) o.field = render::ColorField::strain;
+  ImGui::SameLine();
+  if (ImGui::RadioButton("speed", field == 1)) o.field = render::ColorField::velocity;
+  ImGui::SameLine();
+  if (ImGui::RadioButton("sliding", field == 2)) o.field = render::ColorField::sliding;
+  ImGui::Checkbox("whole fabric", &o.mirror);
+  help_marker("Mirror the modelled quarter / half to show the whole fabric.");
+  ImGui::SameLine();
+  ImGui::Checkbox("projectile", &o.show_projectile);
+  ImGui::SameLine();
+  ImGui::Checkbox("clamps", &o.show_clamps);
+  ImGui::Checkbox("section cut", &o.section_cut);
+  ImGui::SameLine();
+  ImGui::Checkbox("caption", &o.show_caption);
+}
+
+void export_section(GuiApp& app) {
+  char dir[512];
+  std::snprintf(dir, sizeof dir, "%s", app.export_dir.c_str());
+  if (ImGui::InputText("folder", dir, sizeof dir)) app.export_dir = dir;
+  const float full = ImGui::GetContentRegionAvail().x;
+  const float third = (full - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
+  if (ImGui::Button("Screenshot", ImVec2(third, 0))) {
+    app.screenshot_requested = true;
+    app.screenshot_path = next_screenshot_path(app);
+  }
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("PNG of the whole window [P]");
+  ImGui::SameLine();
+  if (ImGui::Button("CSV + JSON", ImVec2(third, 0))) export_results(app);
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("history.csv and summary.json of the run on screen");
+  ImGui::SameLine();
+  if (ImGui::Button("Scene TOML", ImVec2(third, 0))) export_scene(app);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("A scene file that reproduces the run on screen: ravel gui FILE");
+  const int n = int(app.view.past_runs.size());
+  ImGui::BeginDisabled(n == 0);
+  char label[64];
+  std::snprintf(label, sizeof label, "Clear %d earlier run%s from the charts [C]", n, n == 1 ? "" : "s");
+  if (ImGui::Button(label, ImVec2(full, 0))) app.worker->clear_past_runs();
+  ImGui::EndDisabled();
+}
+
+}  // namespace
+
+bool restart_with_draft(GuiApp& app) {
+  try {
+    Scene s = parse_scene(scene_to_toml(app.draft), app.draft.source.empty() ? "app" : app.draft.source);
+    s.source = app.draft.source;
+    app.scene_error.clear();
+    app.worker->restart(s);
+    return true;
+  } catch (const std::exception& e) {
+    app.scene_error = e.what();
+    return false;
+  }
+}
+
+void set_draft_value(GuiApp& app, const std::string& key_value) {
+  const std::string source = app.draft.source;
+  app.draft = parse_scene(scene_to_toml(app.draft), "app", {key_value});
+  app.draft.source = source;
+}
+
+void draw_left_panel(GuiApp& app) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(app.left_w, io.DisplaySize.y));
+  ImGui::Begin("controls", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::TextColored(kAccent, "ravel");
+  ImGui::SameLine();
+  ImGui::TextDisabled("projectile vs woven fabric, yarn by yarn");
+  ImGui::Separator();
+  run_controls(app);
+  ImGui::Spacing();
+
+  ImGui::PushItemWidth(ImGui::GetContentRegionAvail().x * 0.58f);
+  bool changed = false;
+  if (ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) changed |= scene_section(app);
+  if (ImGui::CollapsingHeader("Projectile", ImGuiTreeNodeFlags_DefaultOpen)) changed |= projectile_section(app);
+  if (ImGui::CollapsingHeader("Inter-yarn friction", ImGuiTreeNodeFlags_DefaultOpen)) changed |= friction_section(app);
+  if (ImGui::CollapsingHeader("Solver")) changed |= solver_section(app);
+  ImGui::PopItemWidth();
+  if (!app.scene_error.empty()) {
+    ImGui::PushTextWrapPos(0);
+    ImGui::TextColored(kBad, "%s", app.scene_error.c_str());
+    ImGui::PopTextWrapPos();
+  }
+  // Sliders restart on release, not on every pixel of a drag.
+  if (changed && app.auto_restart) {
+    if (!ImGui::IsMouseDown(ImGuiMouseButton_Left)) restart_with_draft(app);
+  }
+  if (app.auto_restart && ImGui::IsMouseReleased(ImGuiMouseButton_Left) &&
+      run_key(app.draft) != run_key(app.view.scene))
+    restart_with_draft(app);
+  if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
+  if (ImGui::CollapsingHeader("Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
+  ImGui::End();
+}
+
+namespace {
+double v_proj(const HistoryRow& r) { return r.projectile_velocity_mps; }
+double e_proj(const HistoryRow& r) { return r.ledger.projectile_ke_J; }
+double e_fabric(const HistoryRow& r) { return r.ledger.fabric_ke_J; }
+double e_strain(const HistoryRow& r) { return r.ledger.strain_energy_J; }
+double e_visc(const HistoryRow& r) { return r.ledger.viscous_J; }
+double e_fric(const HistoryRow& r) { return r.ledger.friction_work_J; }
+double e_pfric(const HistoryRow& r) { return r.ledger.projectile_friction_J; }
+double e_contact(const HistoryRow& r) { return r.ledger.contact_loss_J; }
+double e_released(const HistoryRow& r) { return r.ledger.released_J; }
+}  // namespace
+
+void draw_charts_panel(GuiApp& app) {
+  const ImGuiIO& io = ImGui::GetIO();
+  const float w = io.DisplaySize.x - app.left_w - app.status_w;
+  ImGui::SetNextWindowPos(ImVec2(app.left_w, io.DisplaySize.y - app.bottom_h));
+  ImGui::SetNextWindowSize(ImVec2(w, app.bottom_h));
+  ImGui::Begin("charts", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoScrollbar |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+  const WorkerView& v = app.view;
+  std::vector<ChartOverlay> overlays;
+  for (const auto& r : v.past_runs) overlays.push_back({r.label, &r.history});
+  double x_max = v.scene.solver.end_time_s;
+  for (const auto& r : v.past_runs)
+    if (!r.history.empty()) x_max = std::max(x_max, r.history.back().t_s);
+
+  const ImVec2 avail = ImGui::GetContentRegionAvail();
+  const float gap = ImGui::GetStyle().ItemSpacing.x * 2;
+  const float cw = (avail.x - gap) * 0.42f, ew = avail.x - gap - cw;
+
+  ChartSpec vel;
+  vel.id = "velocity";
+  vel.title = "Projectile velocity";
+  vel.y_label = "velocity along the flight path (m/s)";
+  vel.x_max_s = x_max;
+  vel.y_min = 0;
+  vel.y_max = v.scene.projectile.velocity_mps;
+  vel.rows = &v.history;
+  vel.overlays = overlays;
+  vel.series = {{"current run", IM_COL32(255, 170, 60, 255), v_proj}};
+  draw_chart(vel, ImVec2(cw, avail.y));
+
+  ImGui::SameLine(0, gap);
+  ChartSpec en;
+  en.id = "energy";
+  en.title = "Energy ledger";
+  en.y_label = "energy, whole fabric (J)";
+  en.x_max_s = x_max;
+  en.y_min = 0;
+  en.y_max = 0.5 * v.scene.projectile.mass_kg * v.scene.projectile.velocity_mps * v.scene.projectile.velocity_mps;
+  en.rows = &v.history;
+  en.overlays = overlays;
+  en.series = {{"projectile KE", IM_COL32(255, 170, 60, 255), e_proj},
+               {"fabric KE", IM_COL32(90, 180, 255, 255), e_fabric},
+               {"strain energy", IM_COL32(110, 220, 120, 255), e_strain},
+               {"viscous", IM_COL32(200, 130, 255, 255), e_visc},
+               {"yarn friction", IM_COL32(255, 230, 80, 255), e_fric},
+               {"projectile friction", IM_COL32(200, 150, 100, 255), e_pfric},
+               {"contact loss", IM_COL32(170, 170, 170, 255), e_contact},
+               {"released (broken)", IM_COL32(255, 110, 160, 255), e_released}};
+  draw_chart(en, ImVec2(ew, avail.y));
+  ImGui::End();
+}
+
+void draw_status_panel(GuiApp& app) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - app.status_w, io.DisplaySize.y - app.bottom_h));
+  ImGui::SetNextWindowSize(ImVec2(app.status_w, app.bottom_h));
+  ImGui::Begin("status", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  const WorkerView& v = app.view;
+  const Summary& s = v.summary;
+  ImVec4 state_colour = kGood;
+  std::string state = to_string(v.state);
+  if (v.state == WorkerState::diverged) state_colour = kBad;
+  if (v.state == WorkerState::paused) state_colour = kWarn;
+  if (v.state == WorkerState::finished) {
+    state_colour = ImVec4(0.6f, 0.75f, 1.0f, 1.0f);
+    state = std::string("finished: ") + to_string(s.end_reason);
+  }
+  ImGui::TextDisabled("run %ld", v.run_id);
+  ImGui::SameLine();
+  ImGui::TextColored(state_colour, "%s", state.c_str());
+  const double t_us = v.frame.time_s * 1e6, end_us = v.scene.solver.end_time_s * 1e6;
+  char overlay[64];
+  std::snprintf(overlay, sizeof overlay, "t = %.2f / %.0f \xC2\xB5s", t_us, end_us);
+  ImGui::ProgressBar(end_us > 0 ? float(std::min(1.0, t_us / end_us)) : 0.0f, ImVec2(-1, 0), overlay);
+  if (v.steps_per_s > 0)
+    ImGui::Text("%.0f steps/s  %.2f \xC2\xB5s/s", v.steps_per_s, v.sim_us_per_wall_s);
+  else
+    ImGui::TextDisabled("solver idle");
+  ImGui::SameLine();
+  ImGui::TextDisabled("  UI %.0f fps", app.fps);
+  ImGui::Text("%s model, %s", s.model.c_str(), s.contact_model.c_str());
+  if (ImGui::IsItemHovered() && !s.model_reason.empty()) ImGui::SetTooltip("%s", s.model_reason.c_str());
+  ImGui::Text("%d nodes, %d elements", s.node_count, s.element_count);
+  ImGui::Text("%d crossings, dt %.1f ns", s.crossing_count, s.dt_s * 1e9);
+  ImGui::Separator();
+  const double vel = v.history.empty() ? s.impact_velocity_mps : v.history.back().projectile_velocity_mps;
+  ImGui::Text("projectile %.1f m/s (impact %.0f)", vel, s.impact_velocity_mps);
+  if (s.perforated)
+    ImGui::TextColored(kBad, "PERFORATED at %.1f \xC2\xB5s, exit %.1f m/s", s.perforation_time_s * 1e6,
+                       s.residual_velocity_mps);
+  else if (v.state == WorkerState::finished)
+    ImGui::TextColored(kGood, "not perforated (%s)", to_string(s.end_reason));
+  else
+    ImGui::TextColored(kGood, "not perforated (yet)");
+  ImGui::Text("absorbed %.2f J, friction %.2f J", s.energy_absorbed_J, s.friction_work_J);
+  ImGui::Text("broken yarns %d warp, %d weft", s.broken_warp_yarns, s.broken_weft_yarns);
+  ImGui::Text("max strain %.2f %%, balance %.1e", s.max_strain * 100, s.energy_balance_error);
+  ImGui::PushTextWrapPos(0);
+  if (!v.message.empty()) ImGui::TextColored(kBad, "%s", v.message.c_str());
+  for (const auto& w : s.warnings) ImGui::TextColored(kWarn, "warning: %s", w.c_str());
+  if (!app.notice.empty()) ImGui::TextColored(app.notice_is_error ? kBad : kGood, "%s", app.notice.c_str());
+  ImGui::PopTextWrapPos();
+  ImGui::End();
+}
+
+std::string next_screenshot_path(const GuiApp& app) {
+  for (int i = 1;; ++i) {
+    char name[96];
+    std::snprintf(name, sizeof name, "/%s_screenshot_%03d.png", app.view.scene.name.c_str(), i);
+    const std::string p = app.export_dir + name;
+    if (!std::filesystem::exists(p) || i > 999) return p;
+  }
+}
+
+void export_results(GuiApp& app) {
+  try {
+    prepare_output_dir(app.export_dir);
+    write_file_atomic(app.export_dir + "/history.csv", history_csv(app.view.history));
+    write_file_atomic(app.export_dir + "/summary.json", summary_json(app.view.summary, app.view.scene));
+    set_notice(app, "wrote " + app.export_dir + "/history.csv and summary.json", false);
+  } catch (const std::exception& e) {
+    set_notice(app, std::string("export failed: ") + e.what(), true);
+  }
+}
+
+void export_scene(GuiApp& app) {
+  try {
+    prepare_output_dir(app.export_dir);
+    const std::string path = app.export_dir + "/" + app.view.scene.name + ".toml";
+    write_file_atomic(path, scene_to_toml(app.view.scene));
+    set_notice(app, "wrote " + path + " (open it with: ravel gui " + path + ")", false);
+  } catch (const std::exception& e) {
+    set_notice(app, std::string("export failed: ") + e.what(), true);
+  }
+}
+
+}  // namespace ravel::app::gui
