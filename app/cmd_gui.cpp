@@ -277,8 +277,8 @@ class ViewCache {
     const bool view_changed = key != drawn_key_;
     if (busy || new_frame || view_changed) last_change_ = now;
     const bool still = now - last_change_ > std::chrono::milliseconds(250);
-    // Budget: at most about a third of wall time on the fabric while a run plays.
-    const auto min_gap = std::chrono::duration<double, std::milli>(std::max(50.0, 2.0 * last_ms_));
+    // Budget: at most about a quarter of wall time on the fabric while a run plays.
+    const auto min_gap = std::chrono::duration<double, std::milli>(std::max(66.0, 3.0 * last_ms_));
     bool draw = !valid_ || view_changed || force_hq;
     if (!draw && new_frame && now - last_draw_ >= min_gap) draw = true;
     if (!draw && still && !hq_) draw = true;  // settle to full quality
@@ -571,9 +571,10 @@ int cmd_gui(const Args& args) {
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         std::printf(
             "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms), 3D view drawn %ld times "
-            "(%.0f ms each), simulated time %.2f us, run %ld %s, mu %.2f\n",
+            "(%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f\n",
             frame, wall, double(frame) / wall, worst_frame_ms, view_cache.draws(),
-            view_ms_total / double(std::max(1L, view_cache.draws())), sim_at_end_us, app.view.run_id,
+            view_ms_total / double(std::max(1L, view_cache.draws())), ImGui::GetIO().MetricsRenderVertices,
+            sim_at_end_us, app.view.run_id,
             to_string(app.view.state), app.view.scene.yarn.friction);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }

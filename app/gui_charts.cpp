@@ -104,7 +104,11 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   std::vector<Item> items;
   for (const auto& s : spec.series)
     items.push_back({s.label, s.color, false, sw + pad + ImGui::CalcTextSize(s.label.c_str()).x});
-  if (!spec.overlays.empty()) {
+  const bool own_colours = !spec.overlays.empty() && spec.overlays[0].color != 0;
+  if (own_colours) {
+    for (const auto& o : spec.overlays)
+      items.push_back({o.label, o.color, true, sw + pad + ImGui::CalcTextSize(o.label.c_str()).x});
+  } else if (!spec.overlays.empty()) {
     std::string faint = spec.overlays.size() == 1 ? spec.overlays[0].label + " (faint)"
                                                   : std::to_string(spec.overlays.size()) + " earlier runs (faint)";
     items.push_back({faint, IM_COL32(200, 200, 200, 110), true, sw + pad + ImGui::CalcTextSize(faint.c_str()).x});
@@ -164,7 +168,8 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   dl->PushClipRect(p0, p1, true);
   for (const auto& o : spec.overlays)
     for (const auto& s : spec.series)
-      plot_rows(dl, *o.rows, s.value, with_alpha(s.color, 0.28f), 1.4f, p0, p1, x_max, y_min, y_max);
+      plot_rows(dl, *o.rows, s.value, o.color ? o.color : with_alpha(s.color, 0.28f), 1.4f, p0, p1, x_max,
+                y_min, y_max);
   if (spec.rows)
     for (const auto& s : spec.series)
       plot_rows(dl, *spec.rows, s.value, s.color, 2.0f, p0, p1, x_max, y_min, y_max);

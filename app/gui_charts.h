@@ -23,6 +23,7 @@ struct ChartSeries {
 struct ChartOverlay {
   std::string label;
   const std::vector<HistoryRow>* rows = nullptr;
+  ImU32 color = 0;  // 0: each series in its own colour, faint; else this colour for all
 };
 
 struct ChartSpec {

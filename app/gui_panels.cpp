@@ -392,9 +392,13 @@ void draw_charts_panel(GuiApp& app) {
   const WorkerView& v = app.view;
   std::vector<ChartOverlay> overlays;
   for (const auto& r : v.past_runs) overlays.push_back({r.label, &r.history});
-  double x_max = v.scene.solver.end_time_s;
+  // Time axis: what has been simulated (this run or an earlier one) plus room to grow,
+  // in steps of 10 us, never past the end time; a long end time does not squash the start.
+  double t_data = v.history.empty() ? 0 : v.history.back().t_s;
   for (const auto& r : v.past_runs)
-    if (!r.history.empty()) x_max = std::max(x_max, r.history.back().t_s);
+    if (!r.history.empty()) t_data = std::max(t_data, r.history.back().t_s);
+  double x_max = std::max(20e-6, std::ceil(t_data * 1.2 / 10e-6) * 10e-6);
+  if (v.scene.solver.end_time_s > 0) x_max = std::min(x_max, std::max(v.scene.solver.end_time_s, t_data));
 
   const ImVec2 avail = ImGui::GetContentRegionAvail();
   const float gap = ImGui::GetStyle().ItemSpacing.x * 2;
@@ -408,8 +412,16 @@ void draw_charts_panel(GuiApp& app) {
   vel.y_min = 0;
   vel.y_max = v.scene.projectile.velocity_mps;
   vel.rows = &v.history;
+  // Earlier runs each in their own faint hue, so mu = 0.1 and mu = 0.4 can be told apart.
+  static const ImU32 faint[] = {IM_COL32(120, 190, 255, 130), IM_COL32(140, 230, 140, 130),
+                                IM_COL32(230, 140, 230, 130), IM_COL32(240, 230, 120, 130),
+                                IM_COL32(160, 160, 255, 130), IM_COL32(200, 200, 200, 130)};
   vel.overlays = overlays;
-  vel.series = {{"current run", IM_COL32(255, 170, 60, 255), v_proj}};
+  for (size_t i = 0; i < vel.overlays.size(); ++i) vel.overlays[i].color = faint[i % 6];
+  char now_label[96];
+  std::snprintf(now_label, sizeof now_label, "run %ld: mu %.2f, %.0f m/s (now)", v.run_id, v.scene.yarn.friction,
+                v.scene.projectile.velocity_mps);
+  vel.series = {{now_label, IM_COL32(255, 170, 60, 255), v_proj}};
   draw_chart(vel, ImVec2(cw, avail.y));
 
   ImGui::SameLine(0, gap);

@@ -89,6 +89,8 @@ void SimWorker::reset() {
 }
 
 void SimWorker::restart(const Scene& scene) {
+  paused_.store(false);  // a restart is to watch the new values play out
+  steps_requested_.store(0);
   {
     std::lock_guard<std::mutex> lk(mutex_);
     pending_.scene = scene;
@@ -242,6 +244,7 @@ void SimWorker::rebuild(const Scene& edited) {
   scene_ = scene;
   ++run_id_;
   diverged_ = false;
+  pause_at_fired_ = false;
   message_.clear();
   published_rows_ = 0;
   anchor_wall_ = Clock::now();
@@ -268,7 +271,10 @@ bool SimWorker::apply_commands() {
       scene_.solver.threads = *p.threads;
       sim_->solver().set_threads(*p.threads);
     }
-    if (p.pause_at_s) pause_at_s_ = *p.pause_at_s;
+    if (p.pause_at_s) {
+      pause_at_s_ = *p.pause_at_s;
+      pause_at_fired_ = pause_at_s_ >= 0 && sim_->time_s() + 0.5 * sim_->dt_s() >= pause_at_s_;
+    }
     if (p.max_past_runs) max_past_runs_ = *p.max_past_runs;
     if (p.clear_past) {
       std::lock_guard<std::mutex> lk(mutex_);
@@ -405,9 +411,9 @@ void SimWorker::loop() {
       }
       force = true;
     }
-    if (pause_at_s_ >= 0 && sim_->time_s() + 0.5 * sim_->dt_s() >= pause_at_s_) {
+    if (pause_at_s_ >= 0 && !pause_at_fired_ && sim_->time_s() + 0.5 * sim_->dt_s() >= pause_at_s_) {
       paused_.store(true);
-      pause_at_s_ = -1;
+      pause_at_fired_ = true;  // Play goes on past it; the next run stops there again
       force = true;
     }
 

@@ -90,11 +90,13 @@ class SimWorker {
   void pause();
   void toggle_pause();
   void step_once(int steps = 1);                // while paused: advance this many steps
-  void reset();                                 // rebuild the current scene, t = 0
-  void restart(const Scene& scene);             // rebuild with new values, t = 0
+  void reset();                                 // rebuild the current scene, t = 0 (stays paused if paused)
+  void restart(const Scene& scene);             // rebuild with new values, t = 0, and play
   void set_pacing(const Pacing& pacing);
   void set_threads(int threads);                // solver threads, applied live
-  void pause_at(double t_s);                    // pause when simulated time reaches t_s (< 0: never)
+  // Pause every run when its simulated time reaches t_s (< 0: never). Play continues
+  // past it; a reset or restart stops there again.
+  void pause_at(double t_s);
   void clear_past_runs();
   void set_max_past_runs(int n);                // default 6
   void request_exit();
@@ -156,6 +158,7 @@ class SimWorker {
   int next_label_ = 1;
   Pacing pacing_live_;
   double pause_at_s_ = -1;
+  bool pause_at_fired_ = false;
   int max_past_runs_ = 6;
   std::string message_;
   bool diverged_ = false;

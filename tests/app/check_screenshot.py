@@ -76,9 +76,10 @@ def main():
     lum = [0.3 * r + 0.59 * g + 0.11 * b for r, g, b in view]
     mean = sum(lum) / len(lum)
     sd = (sum((v - mean) ** 2 for v in lum) / len(lum)) ** 0.5
-    # The fabric is colour-mapped (turbo): saturated pixels. The background gradient,
-    # the clamps and the UI are greys and grey-blues.
-    colourful = sum(1 for r, g, b in view if max(r, g, b) - min(r, g, b) > 90) / len(view)
+    # The fabric is colour-mapped (turbo): either saturated, or at rest (the low end of the
+    # map, a dark purple with red above green). The background gradient, the clamps, the
+    # projectile and the caption are greys and grey-blues (red never above green).
+    colourful = sum(1 for r, g, b in view if max(r, g, b) - min(r, g, b) > 90 or r > g + 12) / len(view)
     text = sum(1 for r, g, b in panel if min(r, g, b) > 170) / len(panel)
     print(f"{path}: {w}x{h}, view luminance {mean:.0f} +- {sd:.0f}, "
           f"colour-mapped fabric {100 * colourful:.1f} % of the view, panel text {100 * text:.2f} %")

@@ -89,6 +89,7 @@ TEST(SimWorker, RestartAppliesTheEditedSceneAtAStepBoundary) {
   SimWorker w(small_scene(), false);
   ASSERT_TRUE(w.wait_for_steps(20, 10s));
   w.restart(small_scene({"yarn.friction=0.4"}));
+  ASSERT_TRUE(w.wait_for_steps(3, 10s));  // a restart plays
   w.pause();
   ASSERT_TRUE(w.wait_idle(10s));
   WorkerView v;
@@ -167,6 +168,16 @@ TEST(SimWorker, PauseAtStopsAtThatTime) {
   WorkerView v;
   w.sync(v);
   EXPECT_EQ(v.state, WorkerState::paused);
+  EXPECT_NEAR(v.frame.time_s, 1.0e-6, v.summary.dt_s);
+  // Play continues past it; a reset stops there again.
+  w.play();
+  ASSERT_TRUE(w.wait_for_steps(v.step_count + 5, 10s));
+  w.reset();
+  w.play();
+  ASSERT_TRUE(w.wait_for_steps(1000000, 20s));
+  ASSERT_TRUE(w.wait_idle(10s));
+  w.sync(v);
+  EXPECT_EQ(v.run_id, 2);
   EXPECT_NEAR(v.frame.time_s, 1.0e-6, v.summary.dt_s);
 }
 
