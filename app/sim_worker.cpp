@@ -319,6 +319,7 @@ void SimWorker::publish(bool force) {
     s.message = message_;
     s.steps_per_s = steps_per_s_;
     s.sim_us_per_wall_s = sim_rate_;
+    s.commands_applied = applied_commands_;
   }
   published_rows_ = rows.size();
   published_.notify_all();
@@ -337,9 +338,8 @@ void SimWorker::loop() {
     if (!may_step) {
       steps_per_s_ = sim_rate_ = 0;
       if (changed || was_stepping || issued != seen_commands) {
+        applied_commands_ = issued;
         publish(true);
-        std::lock_guard<std::mutex> lk(mutex_);
-        shared_.commands_applied = issued;
       }
       published_.notify_all();
       seen_commands = issued;
@@ -361,8 +361,9 @@ void SimWorker::loop() {
       was_stepping = true;
     }
     if (changed || issued != seen_commands) {
-      std::lock_guard<std::mutex> lk(mutex_);
-      shared_.commands_applied = issued;
+      // Say "applied" only together with the state those commands produced.
+      applied_commands_ = issued;
+      publish(true);
     }
     seen_commands = issued;
 

@@ -163,6 +163,7 @@ class SimWorker {
   std::string message_;
   bool diverged_ = false;
   size_t published_rows_ = 0;
+  long applied_commands_ = 0;  // commands_issued_ as of the last apply_commands()
   std::chrono::steady_clock::time_point last_publish_{};
   // Pacing anchor: at wall time anchor_wall_ the simulation was at anchor_sim_s_.
   std::chrono::steady_clock::time_point anchor_wall_{};
