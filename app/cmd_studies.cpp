@@ -167,6 +167,7 @@ int cmd_limit(const Args& args) {
         std::printf("  %-7s %8.2f m/s: %s", why.c_str(), v, s.perforated ? "perforated" : "stopped");
         if (s.perforated) std::printf(", residual %.1f m/s", s.residual_velocity_mps);
         if (!s.decided) std::printf(" (undecided at end time)");
+        if (s.failed) std::printf(" -- FAILED: %s", s.error.c_str());
         std::printf("  [%.1f s]\n", s.wall_time_s);
         std::fflush(stdout);
       }
@@ -196,6 +197,7 @@ int cmd_limit(const Args& args) {
     auto sorted = r.runs;
     std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
     for (const auto& s : sorted) {
+      if (s.failed) continue;  // a diverged run has no outcome to show
       runs.x.push_back(s.velocity_mps);
       runs.y.push_back(s.perforated ? s.residual_velocity_mps : 0.0);
     }
@@ -212,21 +214,23 @@ int cmd_limit(const Args& args) {
     }
     studies::write_chart(c, a.out_dir + "/residual_velocity");
     for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
+    const bool any_failed = std::any_of(r.runs.begin(), r.runs.end(), [](const auto& s) { return s.failed; });
     if (!r.bracketed) {
       std::printf("limit: no bracket found in %zu runs (%.1f s); see %s/limit.json\n", r.runs.size(), r.wall_time_s,
                   a.out_dir.c_str());
-      return exit_failure;
+      return any_failed ? exit_diverged : exit_failure;
     }
     std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
                 r.ballistic_limit_mps, r.lo_mps, r.hi_mps, r.runs.size(), r.wall_time_s,
                 r.wall_time_s > 0 ? r.runs.size() / (r.wall_time_s / 3600) : 0.0);
+    if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
     if (r.fit.ok)
       std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
                   r.fit.p, r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
     else if (!has_switch(a, "no-fit"))
       std::printf("  Lambert-Jonas: %s\n", r.fit.note.c_str());
     std::printf("  %s/limit.json, %s/residual_velocity.{png,svg,csv}\n", a.out_dir.c_str(), a.out_dir.c_str());
-    return exit_ok;
+    return r.converged ? exit_ok : any_failed ? exit_diverged : exit_failure;
   } catch (const std::exception& e) {
     return report_error(e);
   }

@@ -119,7 +119,8 @@ void Painter::polyline(const std::vector<std::array<double, 2>>& pts, Rgb c, dou
     while (s < len) {
       const double period_pos = std::fmod(phase + s, on + off);
       const bool drawing = period_pos < on;
-      const double run = std::min(len - s, drawing ? on - period_pos : on + off - period_pos);
+      // At least a hundredth of a pixel per pass: fmod rounding must not stall the walk.
+      const double run = std::max(0.01, std::min(len - s, drawing ? on - period_pos : on + off - period_pos));
       if (drawing && len > 0)
         line(pts[i - 1][0] + dx * s / len, pts[i - 1][1] + dy * s / len, pts[i - 1][0] + dx * (s + run) / len,
              pts[i - 1][1] + dy * (s + run) / len, c, width, false);
@@ -143,8 +144,8 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
 
   double x0, x1, y0, y1;
   chart_ranges(chart, &x0, &x1, &y0, &y1);
-  const auto xt = nice_ticks(x0, x1, std::max(3, int(W / 110)));
-  const auto yt = nice_ticks(y0, y1, std::max(3, int(H / 80)));
+  const auto xt = nice_ticks(x0, x1, 6);  // the target chart_ranges() padded to
+  const auto yt = nice_ticks(y0, y1, 6);
   const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1, ystep = yt.size() > 1 ? yt[1] - yt[0] : 1;
 
   double ylab_w = 0;
@@ -182,6 +183,7 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
   for (size_t k = 0; k < chart.series.size(); ++k) {
     const Series& s = chart.series[k];
     const Rgb c = palette(s.color >= 0 ? s.color : int(k));
+    p.begin_series(s);
     std::vector<std::array<double, 2>> run;
     auto flush = [&] {
       if (s.style != SeriesStyle::markers && run.size() > 1) p.polyline(run, c, std::max(1.5, fs / 7), s.dashed);
@@ -196,6 +198,7 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
       if (s.style != SeriesStyle::line) p.marker(px(s.x[i]), py(s.y[i]), std::max(2.5, fs / 3.5), c);
     }
     flush();
+    p.end_series();
   }
   p.unclip();
   p.rect_outline(left, top, right, bottom, frame, 1);
@@ -278,6 +281,16 @@ class SvgPainter : public Painter {
     if (vertical) out << " transform=\"rotate(-90 " << fmt(x) << " " << fmt(y) << ")\"";
     out << ">" << xml_escape(s) << "</text>\n";
   }
+  void begin_series(const Series& s) override {
+    out << "<g class=\"series\" data-name=\"" << xml_escape(s.name) << "\" data-points=\"";
+    char b[64];
+    for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
+      std::snprintf(b, sizeof b, "%s%.9g,%.9g", i ? " " : "", s.x[i], s.y[i]);
+      out << b;
+    }
+    out << "\">\n";
+  }
+  void end_series() override { out << "</g>\n"; }
   void clip(double x0, double y0, double x1, double y1) override {
     ++clip_id;
     out << "<clipPath id=\"plot" << clip_id << "\"><rect x=\"" << fmt(x0) << "\" y=\"" << fmt(y0) << "\" width=\""

@@ -66,6 +66,9 @@ class Painter {
   // vertical = rotated 90 degrees counter-clockwise (y-axis title).
   virtual void text(double x, double y, const std::string& s, double size_px, Rgb c, int align, bool vertical) = 0;
   virtual double text_width(const std::string& s, double size_px) const { return 0.6 * size_px * double(s.size()); }
+  // Around each series' drawing (the SVG keeps the numbers as data-* attributes).
+  virtual void begin_series(const Series& s) {}
+  virtual void end_series() {}
   virtual void clip(double x0, double y0, double x1, double y1) {}
   virtual void unclip() {}
 };

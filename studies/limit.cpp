@@ -115,12 +115,17 @@ LambertJonas fit_lambert_jonas(const std::vector<double>& v_in, const std::vecto
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit) {
   const auto t0 = std::chrono::steady_clock::now();
   LimitResult res;
+  bool failed = false;
   auto fire = [&](double v, const char* why) {
     Shot s = shoot(v, why);
     s.velocity_mps = v;
     s.purpose = why;
-    if (!s.decided) {
-      char b[200];
+    char b[400];
+    if (s.failed) {
+      std::snprintf(b, sizeof b, "the run at %.2f m/s failed (%s)", v, s.error.c_str());
+      res.warnings.push_back(b);
+      failed = true;
+    } else if (!s.decided) {
       std::snprintf(b, sizeof b,
                     "the run at %.2f m/s reached its end time undecided (counted as not perforated); raise "
                     "solver.end_time_us",
@@ -130,23 +135,25 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
     res.runs.push_back(s);
     return s.perforated;
   };
-  auto budget_left = [&] { return int(res.runs.size()) < opt.max_runs; };
+  auto budget_left = [&] { return int(res.runs.size()) < opt.max_runs && !failed; };
 
   // Bracket: walk from the start velocity by the growth factor until the outcome flips.
   double v = std::clamp(opt.start_mps, opt.min_mps, opt.max_mps);
   bool perf = fire(v, "bracket");
   double lo = -1, hi = -1;
-  (perf ? hi : lo) = v;
+  if (!failed) (perf ? hi : lo) = v;
   while (budget_left() && (lo < 0 || hi < 0)) {
     v = perf ? v / opt.growth : v * opt.growth;
     if (v < opt.min_mps || v > opt.max_mps) break;
     perf = fire(v, "bracket");
+    if (failed) break;
     if (perf) hi = hi < 0 ? v : std::min(hi, v);
     else lo = std::max(lo, v);
   }
   if (lo < 0 || hi < 0) {
-    res.warnings.push_back(lo < 0 ? "no velocity down to the minimum failed to perforate"
-                                  : "no velocity up to the maximum perforated");
+    if (!failed)
+      res.warnings.push_back(lo < 0 ? "no velocity down to the minimum failed to perforate"
+                                    : "no velocity up to the maximum perforated");
     res.lo_mps = lo;
     res.hi_mps = hi;
     res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -156,16 +163,20 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   // Bisection.
   while (hi - lo > opt.tolerance_mps && budget_left()) {
     const double mid = 0.5 * (lo + hi);
-    if (fire(mid, "bisect")) hi = mid;
-    else lo = mid;
+    const bool p = fire(mid, "bisect");
+    if (failed) break;
+    (p ? hi : lo) = mid;
   }
   res.lo_mps = lo;
   res.hi_mps = hi;
   res.converged = hi - lo <= opt.tolerance_mps;
   res.ballistic_limit_mps = 0.5 * (lo + hi);
-  if (!res.converged) res.warnings.push_back("run budget exhausted before the bracket reached the tolerance");
+  if (!res.converged)
+    res.warnings.push_back(failed ? "search stopped by a failed run before the bracket reached the tolerance"
+                                  : "run budget exhausted before the bracket reached the tolerance");
   // Monotonicity check over every run made.
   for (const auto& s : res.runs) {
+    if (s.failed) continue;
     if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
       char b[200];
       std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
@@ -173,15 +184,16 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
       res.warnings.push_back(b);
     }
   }
-  if (with_fit) {
+  if (with_fit && !failed) {
     for (double f : opt.fit_factors) {
       const double vf = res.ballistic_limit_mps * f;
       if (vf > opt.max_mps) continue;
       fire(vf, "fit");
+      failed = false;  // a failed fit run only loses that point
     }
     std::vector<double> vs, vrs;
     for (const auto& s : res.runs)
-      if (s.perforated && s.velocity_mps >= hi) {
+      if (!s.failed && s.perforated && s.velocity_mps >= hi) {
         vs.push_back(s.velocity_mps);
         vrs.push_back(s.residual_velocity_mps);
       }
@@ -204,10 +216,13 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     sim.run(interrupt);
     const Summary s = sim.summary();
     if (s.status == RunStatus::interrupted) throw std::runtime_error("interrupted");
-    if (s.status == RunStatus::diverged)
-      throw std::runtime_error("the run at " + std::to_string(v) + " m/s diverged: " + s.diagnosis);
-    if (on_run) on_run(sim);
     Shot shot;
+    if (s.status == RunStatus::diverged) {
+      shot.failed = true;
+      shot.error = "diverged: " + s.diagnosis;
+    } else if (on_run) {
+      on_run(sim);
+    }
     shot.velocity_mps = v;
     shot.perforated = s.perforated;
     shot.residual_velocity_mps = s.residual_velocity_mps;
@@ -252,6 +267,8 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
     q["perforation_time_s"] = s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
     q["end_reason"] = s.end_reason;
     q["decided"] = s.decided;
+    q["failed"] = s.failed;
+    if (s.failed) q["error"] = s.error;
     q["broken_warp_yarns"] = s.broken_warp_yarns;
     q["broken_weft_yarns"] = s.broken_weft_yarns;
     q["wall_time_s"] = s.wall_time_s;

@@ -27,6 +27,8 @@ struct Shot {
   double wall_time_s = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
   std::string purpose;          // bracket | bisect | fit
+  bool failed = false;          // the run diverged: its outcome means nothing
+  std::string error;            // why
 };
 
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
@@ -68,9 +70,9 @@ struct LimitResult {
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
 
 // A ShootFn that runs `scene_path` with `overrides` plus projectile.velocity_mps=V.
-// `on_run` (optional) sees each finished Simulation (e.g. to keep a frame). Throws
-// std::runtime_error when a run diverges or is interrupted (a bracket built on a
-// diverged run would be meaningless).
+// `on_run` (optional) sees each finished Simulation (e.g. to keep a frame). A diverged
+// run comes back with failed = true (the search stops there: a bracket built on it would
+// be meaningless); an interrupted one throws std::runtime_error.
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
                       const std::atomic<bool>* interrupt = nullptr,
                       std::function<void(const Simulation&)> on_run = {});

@@ -89,6 +89,8 @@ LimitResult limit_from_json(const std::string& text) {
     s.energy_absorbed_J = q.value("energy_absorbed_J", 0.0);
     s.end_reason = q.value("end_reason", "");
     s.decided = q.value("decided", true);
+    s.failed = q.value("failed", false);
+    s.error = q.value("error", "");
     s.broken_warp_yarns = q.value("broken_warp_yarns", 0);
     s.broken_weft_yarns = q.value("broken_weft_yarns", 0);
     s.wall_time_s = q.value("wall_time_s", 0.0);

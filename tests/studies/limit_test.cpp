@@ -1,0 +1,134 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "limit.h"
+#include "study_test_util.h"
+
+namespace ravel::studies {
+namespace {
+
+// A target with a known limit and Lambert-Jonas residual law: perforated iff V >= vbl.
+ShootFn synthetic_target(double a, double p, double vbl, int* calls = nullptr) {
+  return [=](double v, const std::string&) {
+    if (calls) ++*calls;
+    Shot s;
+    s.perforated = v >= vbl;
+    s.residual_velocity_mps = s.perforated ? a * std::pow(std::pow(v, p) - std::pow(vbl, p), 1 / p) : 0;
+    s.end_reason = s.perforated ? "perforated" : "rebounded";
+    return s;
+  };
+}
+
+TEST(BallisticLimit, BracketsAndBisectsToTheTolerance) {
+  for (double vbl : {12.3, 70.4, 71.0, 99.99, 100.0, 433.3}) {
+    for (double tol : {1.0, 0.25}) {
+      int calls = 0;
+      LimitOptions o;
+      o.tolerance_mps = tol;
+      const auto r = find_ballistic_limit(synthetic_target(0.9, 2.0, vbl, &calls), o, false);
+      ASSERT_TRUE(r.bracketed) << vbl;
+      EXPECT_TRUE(r.converged);
+      EXPECT_LE(r.hi_mps - r.lo_mps, tol);
+      EXPECT_LT(r.lo_mps, vbl) << "lo must not perforate";
+      EXPECT_GE(r.hi_mps, vbl) << "hi must perforate";
+      EXPECT_NEAR(r.ballistic_limit_mps, vbl, tol / 2 + 1e-12);
+      EXPECT_EQ(calls, int(r.runs.size()));
+      // Bisection halves the bracket each run: from a bracket of width w it needs
+      // ceil(log2(w / tol)) runs; the growth walk from 100 m/s adds a few.
+      EXPECT_LE(int(r.runs.size()), 8 + int(std::ceil(std::log2(100.0 / tol))));
+      EXPECT_TRUE(r.warnings.empty());
+      for (const auto& s : r.runs) EXPECT_EQ(s.perforated, s.velocity_mps >= vbl);
+    }
+  }
+}
+
+TEST(BallisticLimit, ReportsNoBracketAndFailedRuns) {
+  LimitOptions o;
+  o.max_mps = 500;
+  const auto none = find_ballistic_limit(synthetic_target(1, 2, 5000), o, false);
+  EXPECT_FALSE(none.bracketed);
+  EXPECT_FALSE(none.warnings.empty());
+  // A run that diverges stops the search; nothing after it is trusted.
+  auto diverging = [](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= 70;
+    s.failed = v < 80 && v > 60;
+    s.error = "diverged";
+    return s;
+  };
+  const auto r = find_ballistic_limit(diverging, o, true);
+  EXPECT_FALSE(r.converged);
+  ASSERT_FALSE(r.runs.empty());
+  EXPECT_TRUE(r.runs.back().failed);
+  EXPECT_FALSE(r.warnings.empty());
+}
+
+TEST(LambertJonas, RecoversKnownParametersFromSyntheticPoints) {
+  struct Law { double a, p, vbl; };
+  for (const Law law : {Law{0.9, 2.0, 70.0}, Law{0.75, 2.6, 120.0}, Law{1.0, 1.5, 35.0}}) {
+    std::vector<double> v, vr;
+    for (double f : {1.05, 1.2, 1.5, 2.0, 3.0, 4.0}) {
+      v.push_back(law.vbl * f);
+      vr.push_back(law.a * std::pow(std::pow(v.back(), law.p) - std::pow(law.vbl, law.p), 1 / law.p));
+    }
+    const auto fit = fit_lambert_jonas(v, vr);
+    ASSERT_TRUE(fit.ok) << fit.note;
+    // Exact data: the least-squares optimum is the law itself; the tolerance is the
+    // simplex's convergence, far tighter than any measured scatter.
+    EXPECT_NEAR(fit.a, law.a, 1e-3 * law.a);
+    EXPECT_NEAR(fit.p, law.p, 1e-2 * law.p);
+    EXPECT_NEAR(fit.vbl_mps, law.vbl, 1e-3 * law.vbl);
+    EXPECT_LT(fit.rms_mps, 1e-3);
+  }
+}
+
+TEST(LambertJonas, NoisyPointsStayCloseAndTooFewPointsAreRefused) {
+  // +-1 m/s scatter (about what a 1 m/s bisection tolerance implies) moves Vbl by a few m/s.
+  const double a = 0.85, p = 2.2, vbl = 70;
+  std::vector<double> v, vr;
+  int k = 0;
+  for (double f : {1.1, 1.3, 1.6, 2.0, 2.5, 3.0, 4.0}) {
+    v.push_back(vbl * f);
+    vr.push_back(a * std::pow(std::pow(v.back(), p) - std::pow(vbl, p), 1 / p) + ((k++ % 2) ? 1.0 : -1.0));
+  }
+  const auto fit = fit_lambert_jonas(v, vr);
+  ASSERT_TRUE(fit.ok);
+  EXPECT_NEAR(fit.vbl_mps, vbl, 5.0);
+  EXPECT_LT(fit.rms_mps, 1.1);
+  EXPECT_FALSE(fit_lambert_jonas({100, 200}, {50, 150}).ok);
+}
+
+TEST(BallisticLimit, SearchWithTheFitRecoversTheSyntheticLaw) {
+  LimitOptions o;
+  o.tolerance_mps = 0.5;
+  const auto r = find_ballistic_limit(synthetic_target(0.8, 2.4, 73.3), o, true);
+  ASSERT_TRUE(r.fit.ok) << r.fit.note;
+  EXPECT_NEAR(r.fit.vbl_mps, 73.3, 0.5);
+  EXPECT_NEAR(r.fit.a, 0.8, 0.01);
+}
+
+// The real thing on the cheap scene: the bracket's ends are runs that did (not) perforate,
+// and the search stops at the tolerance.
+TEST(BallisticLimit, CheapSceneBracketsAndConverges) {
+  LimitOptions o;
+  o.start_mps = 50;
+  o.tolerance_mps = 1.0;
+  const auto r = find_ballistic_limit(scene_shooter("", testing::cheap_scene()), o, false);
+  for (const auto& w : r.warnings) ADD_FAILURE() << w;
+  ASSERT_TRUE(r.bracketed);
+  ASSERT_TRUE(r.converged);
+  EXPECT_LE(r.hi_mps - r.lo_mps, 1.0);
+  bool saw_lo = false, saw_hi = false;
+  for (const auto& s : r.runs) {
+    EXPECT_TRUE(s.decided) << s.velocity_mps << " m/s ended " << s.end_reason;
+    if (s.velocity_mps == r.lo_mps) saw_lo = !s.perforated;
+    if (s.velocity_mps == r.hi_mps) saw_hi = s.perforated;
+  }
+  EXPECT_TRUE(saw_lo && saw_hi);
+  EXPECT_GT(r.ballistic_limit_mps, r.lo_mps);
+  EXPECT_LT(r.ballistic_limit_mps, r.hi_mps);
+}
+
+}  // namespace
+}  // namespace ravel::studies

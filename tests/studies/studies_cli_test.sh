@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# ravel sweep / limit / paper as a user runs them: bad input is refused with one clear
+# message and nothing written; shards over the CLI complete a sweep; limit writes its json.
+set -u
+RAVEL=${1:?usage: studies_cli_test.sh path/to/ravel}
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+fails=0
+CHEAP=(--set fabric.width_mm=20 --set fabric.length_mm=20 --set projectile.diameter_mm=4
+       --set projectile.mass_g=0.5 --set solver.dt_factor=0.3 --set solver.end_time_us=600)
+
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+
+# expect_refused NAME EXPECTED_TEXT ARGS...: exit code 1 or 2, message on stderr, no --out folder.
+expect_refused() {
+  local name=$1 text=$2; shift 2
+  local out="$WORK/$name"
+  "$RAVEL" "$@" --out "$out" >"$WORK/$name.stdout" 2>"$WORK/$name.stderr"
+  local rc=$?
+  [[ $rc == 1 || $rc == 2 ]] || fail "$name: exit code $rc"
+  grep -qF -- "$text" "$WORK/$name.stderr" || fail "$name: stderr lacks '$text': $(cat "$WORK/$name.stderr")"
+  [[ $(wc -l <"$WORK/$name.stderr") == 1 ]] || fail "$name: more than one line on stderr"
+  [[ -e $out ]] && fail "$name: $out was created"
+}
+
+expect_refused unknown_key "--vary projectile.speed: unknown scene key" sweep --vary projectile.speed=1,2
+expect_refused bad_range "--vary projectile.velocity_mps: stop < start" sweep --vary projectile.velocity_mps=300:100:10
+expect_refused bad_step "step must be > 0" sweep --vary projectile.velocity_mps=100:300:0
+expect_refused bad_value "--vary yarn.friction: value 'x'" sweep --vary yarn.friction=0.1,x
+expect_refused bad_shard "--shard: expected i/n" sweep --vary yarn.friction=0.1 --shard 4/3
+expect_refused bad_jobs "--jobs: expected a whole number" sweep --vary yarn.friction=0.1 --jobs 0
+expect_refused no_vary "sweep needs at least one --vary" sweep
+expect_refused bad_set "scene error" sweep --vary yarn.friction=0.1 --set projectile.mass_g=-1
+expect_refused bad_tol "--tolerance: expected a positive number" limit --tolerance -1
+expect_refused limit_bad_set "projectile.velocity" limit --set projectile.velocity=3
+mkdir -p "$WORK/ro" && chmod 555 "$WORK/ro"
+if [[ $(id -u) != 0 ]]; then
+  expect_refused unwritable "not writable" sweep --vary yarn.friction=0.1 --out "$WORK/ro/x"
+fi
+touch "$WORK/file"
+"$RAVEL" sweep --vary yarn.friction=0.1 --out "$WORK/file" 2>"$WORK/file.err" >/dev/null
+[[ $? == 1 ]] && grep -q "not a folder" "$WORK/file.err" || fail "out is a file: $(cat "$WORK/file.err")"
+
+# Two shards into one folder make the whole sweep; the second writes results.csv with all rows.
+for i in 1 2; do
+  "$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 \
+    --shard $i/2 --jobs 1 --quiet --out "$WORK/sweep" >"$WORK/shard$i.out" 2>&1 || fail "shard $i: $(cat "$WORK/shard$i.out")"
+done
+rows=$(($(wc -l <"$WORK/sweep/results.csv") - 1))
+[[ $rows == 6 ]] || fail "results.csv has $rows rows, expected 6"
+head -1 "$WORK/sweep/results.csv" | grep -q '^case,projectile.velocity_mps,yarn.friction,.*perforated.*residual_velocity_mps.*energy_absorbed_J.*wall_time_s' ||
+  fail "results.csv header: $(head -1 "$WORK/sweep/results.csv")"
+# Rerun: everything is found finished.
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
+  --out "$WORK/sweep" >"$WORK/rerun.out" 2>&1
+grep -q "0 run, 6 already finished" "$WORK/rerun.out" || fail "rerun: $(cat "$WORK/rerun.out")"
+
+# limit on the cheap scene: limit.json with the bracket, the fit and every run.
+"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --quiet --out "$WORK/limit" >"$WORK/limit.out" 2>&1
+rc=$?
+[[ $rc == 0 ]] || fail "limit exit $rc: $(cat "$WORK/limit.out")"
+for key in ballistic_limit_mps bracket_mps lambert_jonas runs; do
+  grep -q "\"$key\"" "$WORK/limit/limit.json" || fail "limit.json lacks $key"
+done
+for f in residual_velocity.png residual_velocity.svg residual_velocity.csv; do
+  [[ -s $WORK/limit/$f ]] || fail "limit: $f missing"
+done
+
+if [[ $fails == 0 ]]; then echo "studies CLI: all passed"; else echo "studies CLI: $fails failed"; exit 1; fi

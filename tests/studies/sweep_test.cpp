@@ -1,0 +1,227 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "results.h"
+#include "study_test_util.h"
+#include "sweep.h"
+
+namespace ravel::studies {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::cheap_scene;
+using testing::scratch_dir;
+
+std::vector<Case> cheap_cases() {
+  return expand_cases({parse_vary("projectile.velocity_mps=60:180:60", "", cheap_scene()),
+                       parse_vary("yarn.friction=0.1,0.3", "", cheap_scene())});
+}
+
+SweepOptions cheap_options(const std::string& dir, int jobs = 2) {
+  SweepOptions o;
+  o.overrides = cheap_scene();
+  o.out_dir = dir;
+  o.jobs = jobs;
+  return o;
+}
+
+const std::vector<std::string> kKeys{"projectile.velocity_mps", "yarn.friction"};
+
+TEST(Sweep, ParseVaryRangeAndList) {
+  const Vary r = parse_vary("projectile.velocity_mps=180:500:20");
+  ASSERT_EQ(r.values.size(), 17u);  // 180, 200, ..., 500 inclusive
+  EXPECT_EQ(r.values.front(), "180");
+  EXPECT_EQ(r.values.back(), "500");
+  const Vary f = parse_vary("yarn.friction=0:0.3:0.1");  // 0.1 steps do not add up exactly
+  ASSERT_EQ(f.values.size(), 4u);
+  EXPECT_EQ(f.values[3], "0.3");
+  const Vary l = parse_vary("solver.model=sliding,pin_jointed");
+  EXPECT_EQ(l.values, (std::vector<std::string>{"sliding", "pin_jointed"}));
+}
+
+TEST(Sweep, BadVaryNamesFlagKeyAndProblem) {
+  auto message = [](const std::string& text) {
+    try {
+      parse_vary(text);
+    } catch (const StudyError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("projectile.speed=1,2").find("--vary projectile.speed: unknown scene key"), std::string::npos);
+  EXPECT_NE(message("projectile.velocity_mps=300:100:10").find("stop < start"), std::string::npos);
+  EXPECT_NE(message("projectile.velocity_mps=1:2:0").find("step must be > 0"), std::string::npos);
+  EXPECT_NE(message("projectile.velocity_mps=1:2").find("start:stop:step"), std::string::npos);
+  EXPECT_NE(message("projectile.velocity_mps=100,-3").find("value '-3'"), std::string::npos);
+  EXPECT_NE(message("solver.model=sliding,banana").find("value 'banana'"), std::string::npos);
+  EXPECT_NE(message("yarn.friction").find("expected key="), std::string::npos);
+  EXPECT_THROW(parse_shard("0/4"), StudyError);
+  EXPECT_THROW(parse_shard("5/4"), StudyError);
+  EXPECT_THROW(parse_shard("1-4"), StudyError);
+}
+
+TEST(Sweep, CasesAreTheCartesianProductLastKeyFastest) {
+  const auto cases = expand_cases({{"a.x", {"1", "2", "3"}}, {"b.y", {"p", "q"}}});
+  ASSERT_EQ(cases.size(), 6u);
+  EXPECT_EQ(cases[1].settings[0].second, "1");
+  EXPECT_EQ(cases[1].settings[1].second, "q");
+  std::set<std::string> names;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    EXPECT_EQ(cases[i].index, int(i));
+    names.insert(cases[i].name());
+  }
+  EXPECT_EQ(names.size(), cases.size());  // folder names are unique
+}
+
+TEST(Sweep, ShardsPartitionTheCasesExactlyOnce) {
+  const auto all = expand_cases({{"a.x", {"1", "2", "3", "4", "5", "6", "7"}}, {"b.y", {"p", "q", "r"}}});
+  for (int n = 1; n <= 25; ++n) {
+    std::vector<int> seen(all.size(), 0);
+    size_t biggest = 0, smallest = all.size();
+    for (int i = 1; i <= n; ++i) {
+      const auto part = shard_cases(all, parse_shard(std::to_string(i) + "/" + std::to_string(n)));
+      biggest = std::max(biggest, part.size());
+      smallest = std::min(smallest, part.size());
+      for (const auto& c : part) ++seen[size_t(c.index)];
+    }
+    for (size_t k = 0; k < all.size(); ++k) EXPECT_EQ(seen[k], 1) << "case " << k << " with " << n << " shards";
+    EXPECT_LE(biggest - smallest, 1u) << n << " shards are balanced to one case";
+  }
+}
+
+// results.csv has one row per finished case and its numbers are the case's summary.json.
+void expect_results_match_summaries(const std::string& dir, const std::vector<Case>& cases) {
+  const Csv csv = parse_csv(read_text_file(dir + "/results.csv"));
+  ASSERT_GE(csv.column("projectile.velocity_mps"), 0);
+  ASSERT_GE(csv.column("yarn.friction"), 0);
+  for (const char* k : {"perforated", "residual_velocity_mps", "energy_absorbed_J", "perforation_time_s", "wall_time_s"})
+    ASSERT_GE(csv.column(k), 0) << k;
+  int finished = 0;
+  for (const auto& c : cases) finished += case_finished(dir, c);
+  ASSERT_EQ(int(csv.rows.size()), finished);
+  for (const auto& row : csv.rows) {
+    const std::string name = row[size_t(csv.column("case"))];
+    const auto j = nlohmann::json::parse(read_text_file(dir + "/" + name + "/summary.json"));
+    EXPECT_EQ(row[size_t(csv.column("perforated"))], j["perforated"].get<bool>() ? "true" : "false");
+    EXPECT_NEAR(std::stod(row[size_t(csv.column("energy_absorbed_J"))]), j["energy_absorbed_J"].get<double>(),
+                1e-8 * std::abs(j["energy_absorbed_J"].get<double>()));
+    EXPECT_NEAR(std::stod(row[size_t(csv.column("residual_velocity_mps"))]), j["residual_velocity_mps"].get<double>(),
+                1e-8 * std::abs(j["residual_velocity_mps"].get<double>()) + 1e-12);
+    EXPECT_NEAR(std::stod(row[size_t(csv.column("projectile.velocity_mps"))]), j["impact_velocity_mps"].get<double>(), 1e-9);
+    EXPECT_NEAR(std::stod(row[size_t(csv.column("yarn.friction"))]), j["yarn_friction"].get<double>(), 1e-12);
+  }
+}
+
+TEST(Sweep, RunsEveryCaseIntoItsOwnFolderAndResultsMatchSummaries) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  const auto rep = run_sweep(cases, cases, cheap_options(dir), kKeys);
+  EXPECT_EQ(rep.cases_run, int(cases.size()));
+  EXPECT_EQ(rep.cases_failed, 0);
+  for (const auto& c : cases) {
+    EXPECT_TRUE(case_finished(dir, c)) << c.name();
+    for (const char* f : {"history.csv", "scene.toml", "case.json"})
+      EXPECT_TRUE(fs::exists(case_dir(dir, c) + "/" + f)) << c.name() << "/" << f;
+  }
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << "temporary left: " << e.path();
+  expect_results_match_summaries(dir, cases);
+  EXPECT_TRUE(fs::exists(dir + "/sweep.json"));
+}
+
+TEST(Sweep, RerunResumesAndSkipsFinishedCases) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  run_sweep(cases, cases, cheap_options(dir), kKeys);
+  const std::string kept = read_text_file(case_dir(dir, cases[0]) + "/summary.json");
+  fs::remove_all(case_dir(dir, cases[3]));
+  const auto rep = run_sweep(cases, cases, cheap_options(dir), kKeys);
+  EXPECT_EQ(rep.cases_run, 1);
+  EXPECT_EQ(rep.cases_skipped, int(cases.size()) - 1);
+  EXPECT_TRUE(case_finished(dir, cases[3]));
+  EXPECT_EQ(read_text_file(case_dir(dir, cases[0]) + "/summary.json"), kept) << "a finished case was rewritten";
+  // A longer --vary list reuses the cases it shares with the first sweep.
+  auto more = expand_cases({parse_vary("projectile.velocity_mps=60:240:60", "", cheap_scene()),
+                            parse_vary("yarn.friction=0.1,0.3", "", cheap_scene())});
+  const auto rep2 = run_sweep(more, more, cheap_options(dir), kKeys);
+  EXPECT_EQ(rep2.cases_run, 2);
+  EXPECT_EQ(rep2.cases_skipped, int(cases.size()));
+  expect_results_match_summaries(dir, more);
+}
+
+TEST(Sweep, CaseFoldersAppearWholeOrNotAtAll) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  fs::create_directories(dir);
+  // What a killed run leaves: a half-written temporary of a dead process, and a case
+  // folder without summary.json (e.g. copied by hand). Neither counts as finished.
+  const std::string stale = dir + "/.tmp-" + cases[0].name() + "-" + [] {
+    char h[256] = {0};
+    gethostname(h, sizeof h - 1);
+    std::string s(h);
+    for (char& c : s)
+      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return s;
+  }() + "-2147483000-0";
+  fs::create_directories(stale);
+  write_file_atomic(stale + "/history.csv", "t_s\n0\n");
+  fs::create_directories(case_dir(dir, cases[1]));
+  write_file_atomic(case_dir(dir, cases[1]) + "/history.csv", "partial");
+  EXPECT_FALSE(case_finished(dir, cases[0]));
+  EXPECT_FALSE(case_finished(dir, cases[1]));
+  EXPECT_EQ(parse_csv(results_csv(dir, cases, kKeys)).rows.size(), 0u);
+
+  // A case whose outputs fail mid-way leaves nothing behind.
+  SweepHooks hooks;
+  hooks.on_simulation = [&](const Case& c, const Simulation&, const std::string& tmp) {
+    EXPECT_TRUE(fs::exists(tmp + "/case.json"));
+    if (c.index != 1)  // case 1's incomplete folder was planted above
+      EXPECT_FALSE(fs::exists(case_dir(dir, c))) << "the final folder exists before the case is complete";
+    if (c.index == 2) throw OutputError("disk full (simulated)");
+  };
+  const auto rep = run_sweep(cases, cases, cheap_options(dir), kKeys, hooks);
+  EXPECT_EQ(rep.cases_failed, 1);
+  EXPECT_FALSE(fs::exists(case_dir(dir, cases[2])));
+  EXPECT_FALSE(fs::exists(stale)) << "the dead process's temporary was not cleaned up";
+  EXPECT_TRUE(case_finished(dir, cases[1])) << "the incomplete folder was not redone";
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_NE(e.path().filename().string().rfind(".tmp-", 0), 0u) << "temporary left: " << e.path();
+  expect_results_match_summaries(dir, cases);
+}
+
+TEST(Sweep, ResultsDoNotDependOnJobs) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  run_sweep(cases, cases, cheap_options(dir + "/one", 1), kKeys);
+  run_sweep(cases, cases, cheap_options(dir + "/two", 2), kKeys);
+  for (const auto& c : cases) {
+    auto a = nlohmann::json::parse(read_text_file(case_dir(dir + "/one", c) + "/summary.json"));
+    auto b = nlohmann::json::parse(read_text_file(case_dir(dir + "/two", c) + "/summary.json"));
+    for (auto* j : {&a, &b}) j->erase("wall_time_s"), j->erase("node_steps_per_s");
+    EXPECT_EQ(a, b) << c.name();
+    EXPECT_EQ(read_text_file(case_dir(dir + "/one", c) + "/history.csv"),
+              read_text_file(case_dir(dir + "/two", c) + "/history.csv"));
+  }
+}
+
+TEST(Sweep, ShardsTogetherFinishTheSweep) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  int run = 0;
+  for (int i = 1; i <= 3; ++i) {
+    auto o = cheap_options(dir, 1);
+    o.shard = parse_shard(std::to_string(i) + "/3");
+    run += run_sweep(cases, shard_cases(cases, o.shard), o, kKeys).cases_run;
+  }
+  EXPECT_EQ(run, int(cases.size()));
+  expect_results_match_summaries(dir, cases);
+  EXPECT_EQ(parse_csv(read_text_file(dir + "/results.csv")).rows.size(), cases.size());
+  EXPECT_TRUE(fs::exists(dir + "/sweep_shard3of3.json"));
+}
+
+}  // namespace
+}  // namespace ravel::studies
