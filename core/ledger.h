@@ -15,11 +15,13 @@ struct Ledger {
   double projectile_friction_J = 0;      // dissipated by projectile-yarn friction (Eq 20-22)
   double contact_loss_J = 0;             // kinetic energy removed by the normal contact corrections (Eq 9-11, 19)
   double released_J = 0;                 // energy held by elements at the moment they broke
-  double clamp_work_J = 0;               // work absorbed by clamped nodes (zero: clamps do not move)
+  double external_work_J = 0;            // work done on the system by external loads (tests, pull-out)
 
+  // Energy now held or dissipated, less what external loads put in: equals the initial
+  // energy for an exact integration.
   double total() const {
     return projectile_ke_J + fabric_ke_J + strain_energy_J + viscous_J + friction_work_J +
-           projectile_friction_J + contact_loss_J + released_J + clamp_work_J;
+           projectile_friction_J + contact_loss_J + released_J - external_work_J;
   }
   Ledger scaled(double f) const {
     Ledger l = *this;
@@ -31,7 +33,7 @@ struct Ledger {
     l.projectile_friction_J *= f;
     l.contact_loss_J *= f;
     l.released_J *= f;
-    l.clamp_work_J *= f;
+    l.external_work_J *= f;
     return l;
   }
 };

@@ -80,7 +80,8 @@ struct Model {
   // --- yarn-yarn crossings (sliding model only)
   std::vector<Crossing> crossings;
   double friction = 0.2;
-  double friction_penalty = 0.5;
+  double friction_penalty = 0.25;
+  bool split_penetration = true;
   int contact_iterations = 1;
 
   // --- material

@@ -181,6 +181,7 @@ std::vector<KeyDef> make_defs() {
   }
   NUM("solver.dt_factor", "", "alpha of Eq 4: dt = alpha L / c", 1, 0, true, 10.0, solver.dt_factor);
   INT("solver.contact_iterations", "", "N: yarn contact correction passes per step (Eq 16-17)", 1, 64, solver.contact_iterations);
+  BOOL("solver.split_penetration", "true: penetration left from earlier steps is removed by moving the nodes (no energy injected); false: the paper's velocity-only correction", solver.split_penetration);
   NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0, solver.friction_penalty);
   {
     KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text};

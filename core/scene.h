@@ -70,7 +70,8 @@ struct SolverParams {
   ContactModel model = ContactModel::sliding;
   double dt_factor = 0.5;           // alpha of Eq 4
   int contact_iterations = 1;       // N of Eq 16-17
-  double friction_penalty = 0.5;    // alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12)
+  double friction_penalty = 0.25;   // alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12)
+  bool split_penetration = true;    // resolve penetration left from earlier steps by moving nodes, not by velocity
   SymmetryMode symmetry = SymmetryMode::automatic;
   Precision precision = Precision::double_precision;
   double end_time_s = 150e-6;

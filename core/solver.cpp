@@ -47,6 +47,7 @@ class SolverT final : public Solver {
     dv_contact_.assign(n, V3::Zero());
     dv_friction_.assign(n, V3::Zero());
     dv_pfriction_.assign(n, V3::Zero());
+    dx_contact_.assign(n, V3::Zero());
     for (int i = 0; i < n; ++i) {
       x_[i] = model_.x0[i].cast<Real>();
       v_[i].setZero();
@@ -108,8 +109,9 @@ class SolverT final : public Solver {
     internal_forces();   // Eq 3, 23: element stress from strain; bending; failure
     close_ledger_row();  // ledger at t - dt/2
     integrate();         // Eq 1-2
-    if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
     projectile_contact();                           // Eq 18-22
+    if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
+    if (!model_.crossings.empty() && steps_ % kPenetrationCheckEvery == 0) residual_penetration();
     finish_step();
   }
 
@@ -124,6 +126,14 @@ class SolverT final : public Solver {
     ke_half_ = fabric_ke() + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
   }
   void set_projectile_position(const Vec3d& x) override { xp_ = x.cast<Real>(); }
+  void set_external_force(int node, const Vec3d& f) override {
+    for (auto& e : f_ext_)
+      if (e.first == node) {
+        e.second = f.cast<Real>();
+        return;
+      }
+    f_ext_.push_back({node, f.cast<Real>()});
+  }
   double strain(int e) const override { return double(strain_[e]); }
   double stress(int e) const override { return double(stress_[e]); }
   bool broken(int e) const override { return broken_flag_[e] != 0; }
@@ -311,6 +321,7 @@ class SolverT final : public Solver {
     l.friction_work_J = friction_cum_;
     l.projectile_friction_J = pfriction_cum_;
     l.contact_loss_J = contact_cum_;
+    l.external_work_J = external_cum_;
     stored_prev_ = stored_now_;
     viscous_prev_ = viscous_cum_;
     released_prev_ = released_cum_;
@@ -340,6 +351,7 @@ class SolverT final : public Solver {
       dv_contact_[i].setZero();
       dv_friction_[i].setZero();
       dv_pfriction_[i].setZero();
+      dx_contact_[i].setZero();
       const std::uint8_t fx = model_.fixed[i];
       if (fx == fix_all) continue;
       V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
@@ -350,17 +362,23 @@ class SolverT final : public Solver {
       x_[i] += dt * v;
       maxr2 = std::max(maxr2, double(x_[i].squaredNorm()));
     }
+    // External loads (rare: tests and pull-out): applied after the free update.
+    for (const auto& [i, F] : f_ext_) {
+      if (model_.fixed[i] == fix_all) continue;
+      V3 dv = (dt * Real(model_.inv_mass[i])) * F;
+      const std::uint8_t fx = model_.fixed[i];
+      if (fx & fix_x) dv.x() = 0;
+      if (fx & fix_y) dv.y() = 0;
+      if (fx & fix_z) dv.z() = 0;
+      v_[i] += dv;
+      x_[i] += dt * dv;
+    }
     xp_ += dt * vp_;
     if (!(maxr2 < escape_radius2_))
       fail("a yarn node escaped the domain (more than 10 fabric sizes from the centre) or became NaN");
   }
 
   // ------------------------------------------------------------ yarn contact (Eq 5-17)
-  struct SegPoint {
-    int seg;   // segment index along the yarn (nodes seg, seg+1)
-    Real a;    // fraction along it
-  };
-
   int ynode(int yarn, int k) const { return model_.yarn_node(yarn, k); }
   bool seg_ok(int yarn, int s) const {
     return s >= 0 && s + 1 < model_.yarn_size(yarn) && !broken_flag_[model_.yarn_elem_offset[yarn] + s];
@@ -561,10 +579,11 @@ class SolverT final : public Solver {
     int node[6];      // warp kw-1..kw+1, weft kf-1..kf+1 (-1: none)
     Real w[6];        // signed weights: -warp, +weft
     V3 P;             // normal impulse on the weft contact point (Eq 9-11)
+    V3 S;             // position shift (mass-weighted, like P) of penetration left from before the step
     int fnode[4];     // friction: warp pair, weft pair
     Real fw[4];
     V3 F;             // friction impulse on the weft contact point (Eq 15)
-    bool has_n, has_f;
+    bool has_n, has_f, has_s;
   };
 
   void yarn_contact() {
@@ -590,6 +609,9 @@ class SolverT final : public Solver {
         if (r.has_f)
           for (int k = 0; k < 4; ++k)
             if (r.fw[k] != Real(0)) apply_impulse(r.fnode[k], r.fw[k] * r.F, dv_friction_);
+        if (r.has_s)
+          for (int k = 0; k < 6; ++k)
+            if (r.node[k] >= 0 && r.w[k] != Real(0)) shift_node(r.node[k], r.w[k] * r.S);
       }
     }
     // Book what broke the method's assumptions, in crossing order.
@@ -605,18 +627,16 @@ class SolverT final : public Solver {
       if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
       if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
     }
-    double fsum = 0, maxpen = 0;
+    double fsum = 0;
     int sliding = 0, stuck = 0;
     for (int c = 0; c < nc; ++c) {
       if (!cr_active_[c]) continue;
       fsum += cr_fn_[c];
       if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
-      maxpen = std::max(maxpen, -cr_gap_[c]);
     }
     yarn_force_ = fsum;
     sliding_count_ = sliding;
     stuck_count_ = stuck;
-    diag_.max_penetration = std::max(diag_.max_penetration, maxpen);
   }
 
   void apply_impulse(int i, const V3& P, std::vector<V3>& acc) {
@@ -632,10 +652,23 @@ class SolverT final : public Solver {
     x_[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
   }
 
+  // Move a node by a mass-weighted shift (no velocity change); recorded for the ledger.
+  void shift_node(int i, const V3& S) {
+    const Real im = Real(model_.inv_mass[i]);
+    if (im == Real(0)) return;
+    V3 dx = im * S;
+    const std::uint8_t fx = model_.fixed[i];
+    if (fx & fix_x) dx.x() = 0;
+    if (fx & fix_y) dx.y() = 0;
+    if (fx & fix_z) dx.z() = 0;
+    x_[i] += dx;
+    dx_contact_[i] += dx;
+  }
+
   // Tracking, normal correction and friction of one crossing in one pass.
   void crossing_pass(int c, Real alpha, bool last) {
     CrossingImpulse& r = impulses_[c];
-    r.has_n = r.has_f = false;
+    r.has_n = r.has_f = r.has_s = false;
     if (!cr_active_[c]) return;
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
@@ -697,9 +730,25 @@ class SolverT final : public Solver {
     if (winv <= Real(0)) return;  // every node clamped
     if (delta > Real(0)) {
       // Eq 9-10 with node masses: a relative displacement alpha * delta within the step.
-      const Real P = alpha * delta / (dt * winv);
+      Real dv = delta / dt;
+      if (model_.split_penetration) {
+        // Only the part of delta this step's approach made is removed by a velocity change
+        // (which then leaves the contact at rest: inelastic, as in the paper); penetration
+        // already there before the step is removed by moving the nodes, so no separating
+        // velocity (energy) is injected. See docs/MODEL.md.
+        Real vrel = 0;
+        for (int k = 0; k < 6; ++k)
+          if (r.node[k] >= 0) vrel += r.w[k] * v_[r.node[k]].dot(u);
+        dv = std::min(dv, std::max(Real(0), -vrel));
+        const Real shift = delta - dv * dt;
+        if (shift > Real(0)) {
+          r.S = (alpha * shift / winv) * u;
+          r.has_s = true;
+        }
+      }
+      const Real P = alpha * dv / winv;
       r.P = P * u;
-      r.has_n = true;
+      r.has_n = P > Real(0);
       cr_fn_step_[c] += double(P / dt);  // Eq 11
     }
     if (last) cr_gap_[c] = double(g.dist - D);
@@ -781,16 +830,29 @@ class SolverT final : public Solver {
       if (sd > 0) continue;
       ++touching;
       const double m = model_.mass[i];
-      // Eq 19: push the node back onto the surface within one step.
+      // Eq 19: push the node back onto the surface within one step (with the split, only
+      // the part this step's approach made is a velocity change; see yarn contact).
       const Real pen = Real(-sd);
-      V3 dv_n = (pen / dt) * nrm;
+      Real push = pen / dt;
+      if (model_.split_penetration) {
+        push = std::min(push, std::max(Real(0), -(v_[i] - vp_).dot(nrm)));
+        const Real shift = pen - push * dt;
+        if (shift > Real(0)) {
+          V3 dx = shift * nrm;
+          if (model_.fixed[i] & fix_x) dx.x() = 0;
+          if (model_.fixed[i] & fix_y) dx.y() = 0;
+          x_[i] += dx;
+          dx_contact_[i] += dx;
+        }
+      }
+      V3 dv_n = push * nrm;
       // Eq 20-22: friction from the tangential relative velocity, capped by mu_p |f_n|.
       const V3 vr = v_[i] + dv_n - vp_;
       const V3 vt = vr - vr.dot(nrm) * nrm;
       const Real vtn = vt.norm();
       V3 dv_t = V3::Zero();
       if (vtn > Real(0)) {
-        const Real cap = Real(mu_p) * dv_n.norm();  // mu_p |f_n| dt / m
+        const Real cap = Real(mu_p) * (pen / dt);  // mu_p |f_n| dt / m, f_n of Eq 19
         dv_t = -std::min(vtn, cap) * (vt / vtn);
       }
       const std::uint8_t fx = model_.fixed[i];
@@ -830,6 +892,28 @@ class SolverT final : public Solver {
     return ke;
   }
 
+  // The interpenetration left at the end of a step (after every correction), sampled every
+  // kPenetrationCheckEvery steps: what the contact algorithm failed to resolve.
+  static constexpr int kPenetrationCheckEvery = 8;
+  void residual_penetration() {
+    const int nc = int(model_.crossings.size());
+    double worst = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : worst) if (threads_ > 1)
+    for (int c = 0; c < nc; ++c) {
+      if (!cr_active_[c]) continue;
+      const Crossing& cr = model_.crossings[c];
+      const ContactGeom g = closest(c);
+      if (!g.ok) continue;
+      const V3 tw = x_[ynode(cr.warp_yarn, g.sw + 1)] - x_[ynode(cr.warp_yarn, g.sw)];
+      const V3 tf = x_[ynode(cr.weft_yarn, g.sf + 1)] - x_[ynode(cr.weft_yarn, g.sf)];
+      const V3 n = Real(cr.side) * tw.cross(tf);
+      const double D = cr.contact_distance, dist = double(g.dist);
+      const double pen = g.d.dot(n) >= Real(0) ? D - dist : (dist > D ? 0.0 : D + dist);
+      worst = std::max(worst, pen);
+    }
+    diag_.max_penetration = std::max(diag_.max_penetration, worst);
+  }
+
   // Kinetic energy of v(t + dt/2) and the work of this step's corrections, in one sweep.
   // Work of a correction in the leapfrog's own energy statement: with v- = v(t - dt/2) and
   // v+ = v(t + dt/2) after all corrections, KE(v+) - KE(v-) = sum over forces F of
@@ -837,9 +921,9 @@ class SolverT final : public Solver {
   // its work is m dv . (v- + v+) / 2. (Booking the bare kinetic-energy change of each
   // correction instead would count, every step, energy a resting contact never takes.)
   void finish_step() {
-    double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0;
+    double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0, w_shift = 0;
     const int n = model_.node_count;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction) if (threads_ > 1)
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_shift) if (threads_ > 1)
     for (int i = 0; i < n; ++i) {
       const double hm = 0.5 * model_.mass[i];
       ke += hm * double(v_[i].squaredNorm());
@@ -847,8 +931,14 @@ class SolverT final : public Solver {
       w_contact += hm * double(dv_contact_[i].dot(vsum));
       w_friction += hm * double(dv_friction_[i].dot(vsum));
       w_pfriction += hm * double(dv_pfriction_[i].dot(vsum));
+      // A pure position shift changes the stored energy by -f . dx (to first order) with
+      // no kinetic energy change: that energy is the shift's.
+      w_shift += double(f_[i].dot(dx_contact_[i]));
     }
+    // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
+    for (const auto& [i, F] : f_ext_) external_cum_ += 0.5 * double(model_.dt) * double(F.dot(v_prev_[i] + v_[i]));
     contact_cum_ -= w_contact;
+    contact_cum_ += w_shift;
     friction_cum_ -= w_friction;
     pfriction_cum_ -= w_pfriction;
     ke_fabric_half_ = ke;
@@ -871,7 +961,7 @@ class SolverT final : public Solver {
   int threads_ = 1;
   ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
-  std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_;  // this step's corrections, per mechanism
+  std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
   std::vector<V3> elem_force_, bend_force_;
@@ -887,7 +977,8 @@ class SolverT final : public Solver {
   double ke_half_ = 0, ke_fabric_half_ = 0;
   double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0,
          released_prev_ = 0;
-  double friction_cum_ = 0, pfriction_cum_ = 0, contact_cum_ = 0;
+  double friction_cum_ = 0, pfriction_cum_ = 0, contact_cum_ = 0, external_cum_ = 0;
+  std::vector<std::pair<int, V3>> f_ext_;
   double escape_radius2_ = 1;
 };
 

@@ -7,10 +7,12 @@
 //   internal_forces     element strain -> Zener/elastic stress, bending springs, failure
 //   close_ledger_row    the ledger at t - dt/2 (needs this step's stored energy, see below)
 //   integrate           v += dt/m sum(f) (Eq 1), x += v dt (Eq 2), projectile free flight
-//   yarn_contact        N passes of nearest-pair tracking, normal correction (Eq 5-11) and
-//                       stick/slip friction (Eq 12-15) on the predicted state
 //   projectile_contact  normal push-out (Eq 18-19) and friction (Eq 20-22)
-//   finish_step         kinetic energy of the half-step velocities, divergence checks
+//   yarn_contact        N passes of nearest-pair tracking, normal correction (Eq 5-11) and
+//                       stick/slip friction (Eq 12-15) on the predicted state; last, so
+//                       the yarn-yarn state is resolved at the end of every step
+//   finish_step         kinetic energy of the half-step velocities, the work of this
+//                       step's corrections, divergence checks
 //
 // Energy timing. Central differences carry velocities at half steps and positions at
 // whole steps. The ledger is therefore evaluated at half steps: kinetic energy from
@@ -39,7 +41,7 @@ struct ContactDiagnostics {
   long lost_segments = 0;        // both adjoining segments broken: crossing released
   double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
   int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
-  double max_penetration = 0;    // deepest yarn-yarn interpenetration left after the step (m)
+  double max_penetration = 0;    // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
 };
 
 // Precision-independent view of a solver (the Simulation holds one of two instantiations).
@@ -70,6 +72,9 @@ class Solver {
   virtual void set_position(int node, const Vec3d& x) = 0;
   virtual void set_projectile_velocity(const Vec3d& v) = 0;
   virtual void set_projectile_position(const Vec3d& x) = 0;
+  // A constant external force on a node (N), e.g. to press or pull yarns in tests; its
+  // work is booked in the ledger as external_work_J.
+  virtual void set_external_force(int node, const Vec3d& f) = 0;
   // Element state.
   virtual double strain(int e) const = 0;
   virtual double stress(int e) const = 0;

@@ -23,21 +23,39 @@ TEST(Symmetry, QuarterIsChosenForTheCentredStrike) {
   EXPECT_LT(sim.summary().node_count * 3, forced.summary().node_count);
 }
 
-// Residual velocity and absorbed energy agree between quarter and full. The two differ
-// only in the order the Gauss-Seidel contact sweep visits crossings and in rounding, which
-// after failure (a threshold event) can shift a break by a step: 1 % of the residual
-// velocity and 3 % of the absorbed energy bound that.
+// Through impact and failure the quarter and the full model agree. After failure both are
+// sensitive to which element breaks first (rounding differs between them), and on small
+// patches the outcome can even branch (the central yarn snapping early or late). On a
+// 36 mm patch struck at 200 m/s by a 6 mm, 2 g sphere, each model's own spread when V0
+// moves by 0.1 m/s (measured) is: projectile velocity at 60 us 0.4 %; absorbed energy at
+// 100 us 8.8-9.0 J (sliding) and 10.1-12.5 J (pin-jointed, whose free warp yarns break one
+// by one after 60 us); broken weft yarns +-1. The tolerances below cover those spreads.
+double velocity_at(const std::vector<HistoryRow>& h, double t) {
+  const HistoryRow* best = &h.front();
+  for (const auto& r : h)
+    if (std::abs(r.t_s - t) < std::abs(best->t_s - t)) best = &r;
+  return best->projectile_velocity_mps;
+}
+
 TEST(Symmetry, QuarterAndFullAgree) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-    const auto base = test::small_patch() + std::vector<std::string>{model, "projectile.velocity_mps=400"};
-    const Summary q = test::simulate(test::scene_with(base));
-    const Summary f = test::simulate(test::scene_with(base + std::vector<std::string>{"solver.symmetry=full"}));
-    ASSERT_EQ(q.model, "quarter");
-    ASSERT_EQ(f.model, "full");
-    EXPECT_EQ(q.perforated, f.perforated) << model;
-    EXPECT_NEAR(q.residual_velocity_mps, f.residual_velocity_mps, 0.01 * f.residual_velocity_mps) << model;
-    EXPECT_NEAR(q.energy_absorbed_J, f.energy_absorbed_J, 0.03 * f.energy_absorbed_J) << model;
-    if (f.perforated) EXPECT_NEAR(q.perforation_time_s, f.perforation_time_s, 0.05 * f.perforation_time_s) << model;
+    const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
+                                        "projectile.mass_g=2", "projectile.velocity_mps=200", "solver.end_time_us=100",
+                                        model};
+    Simulation q(test::scene_with(base));
+    Simulation f(test::scene_with(base + std::vector<std::string>{"solver.symmetry=full"}));
+    q.run();
+    f.run();
+    const Summary sq = q.summary(), sf = f.summary();
+    ASSERT_EQ(sq.model, "quarter");
+    ASSERT_EQ(sf.model, "full");
+    const double vq = velocity_at(q.history(), 60e-6), vf = velocity_at(f.history(), 60e-6);
+    EXPECT_NEAR(vq, vf, 0.005 * vf) << model;
+    EXPECT_LT(vq, 0.95 * 200) << model;  // the fabric did slow it
+    const bool pin = std::string(model).find("pin") != std::string::npos;
+    EXPECT_NEAR(sq.energy_absorbed_J, sf.energy_absorbed_J, (pin ? 0.25 : 0.04) * sf.energy_absorbed_J) << model;
+    EXPECT_NEAR(sq.broken_weft_yarns, sf.broken_weft_yarns, 2) << model;
+    EXPECT_GT(sq.broken_weft_yarns, 0) << model;
   }
 }
 
