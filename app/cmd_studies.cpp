@@ -135,6 +135,15 @@ int cmd_sweep(const Args& args) {
                 rep.cases_run, rep.cases_skipped, rep.cases_failed, rep.cases_diverged, rep.wall_time_s,
                 rep.cases_per_hour);
     std::printf("  %s/results.csv\n", opt.out_dir.c_str());
+    // Charts of what is finished so far (all shards), with their CSVs.
+    const auto charts = studies::sweep_charts(
+        studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), keys);
+    if (!charts.empty()) prepare_output_dir(opt.out_dir + "/charts");
+    for (const auto& [stem, chart] : charts) {
+      if (studies::finite_point_count(chart) == 0) continue;
+      studies::write_chart(chart, opt.out_dir + "/charts/" + stem);
+      std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
+    }
     if (rep.interrupted) return exit_interrupted;
     return rep.cases_failed ? exit_failure : exit_ok;
   } catch (const studies::StudyError& e) {

@@ -295,6 +295,69 @@ Csv parse_csv(const std::string& text) {
   return csv;
 }
 
+std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
+                                                       const std::vector<std::string>& varied_keys) {
+  std::vector<std::pair<std::string, Chart>> out;
+  if (varied_keys.empty() || results.rows.empty()) return out;
+  const int xc = results.column(varied_keys[0]);
+  if (xc < 0) return out;
+  double tmp;
+  for (const auto& r : results.rows)
+    if (!parse_number(r[size_t(xc)], &tmp)) return out;  // not a numeric key: no x axis
+  const struct {
+    const char* column;
+    const char* label;
+    const char* unit;
+  } ys[] = {{"energy_absorbed_J", "energy absorbed", "J"}, {"residual_velocity_mps", "residual velocity", "m/s"}};
+  for (const auto& y : ys) {
+    const int yc = results.column(y.column);
+    if (yc < 0) continue;
+    Chart c;
+    c.title = std::string(y.label) + " vs " + varied_keys[0];
+    c.x = {varied_keys[0], ""};
+    for (const auto& k : scene_keys())
+      if (k.key == varied_keys[0]) c.x.unit = k.unit;
+    c.y = {y.label, y.unit};
+    c.y.include_zero = true;
+    std::map<std::string, size_t> index;
+    int c_left_out = 0;
+    for (const auto& r : results.rows) {
+      std::string name;
+      for (size_t k = 1; k < varied_keys.size(); ++k) {
+        const int kc = results.column(varied_keys[k]);
+        name += (name.empty() ? "" : ", ") + varied_keys[k] + " = " + (kc >= 0 ? r[size_t(kc)] : "");
+      }
+      if (name.empty()) name = y.label;
+      if (!index.count(name)) {
+        index[name] = c.series.size();
+        Series s;
+        s.name = name;
+        c.series.push_back(s);
+      }
+      Series& s = c.series[index[name]];
+      double xv, yv;
+      parse_number(r[size_t(xc)], &xv);
+      if (!parse_number(r[size_t(yc)], &yv)) yv = NAN;
+      const int sc = results.column("status");
+      if (sc >= 0 && r[size_t(sc)] != "completed") yv = NAN, ++c_left_out;  // diverged: no answer
+      s.x.push_back(xv);
+      s.y.push_back(yv);
+    }
+    if (c_left_out)
+      c.subtitle = std::to_string(c_left_out) + " case(s) left out: the run diverged (see results.csv, status)";
+    for (auto& s : c.series) {  // sort each series by x
+      std::vector<size_t> o(s.x.size());
+      for (size_t i = 0; i < o.size(); ++i) o[i] = i;
+      std::sort(o.begin(), o.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
+      Series t = s;
+      for (size_t i = 0; i < o.size(); ++i) t.x[i] = s.x[o[i]], t.y[i] = s.y[o[i]];
+      s = t;
+    }
+    out.emplace_back(std::string(y.column) + "_vs_" + varied_keys[0], c);
+  }
+  return out;
+}
+
 SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
                       const std::atomic<bool>* interrupt) {

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "chart.h"
 #include "scene.h"
 #include "simulation.h"
 
@@ -126,6 +127,12 @@ struct Csv {
   int column(const std::string& name) const;  // -1 if absent
 };
 Csv parse_csv(const std::string& text);
+
+// Charts of a sweep's results.csv: energy absorbed and residual velocity against the
+// first varied key (when its values are numbers), one series per combination of the
+// other varied keys. Each chart's file stem is returned beside it.
+std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
+                                                               const std::vector<std::string>& varied_keys);
 std::string read_text_file(const std::string& path);
 
 }  // namespace ravel::studies
