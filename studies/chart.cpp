@@ -84,8 +84,13 @@ void axis_range(const Axis& a, double dlo, double dhi, double* lo, double* hi) {
   }
   const auto t = nice_ticks(dlo, dhi, 6);
   const double step = t.size() > 1 ? t[1] - t[0] : (dhi - dlo);
+  // Ends on a major tick unless that wastes more than 15 % of the span on a side; then on
+  // a minor tick (a fifth of a step), so a tiny negative value does not add a whole step.
+  const double span = dhi - dlo, minor = step / 5;
   *lo = std::floor(dlo / step + 1e-9) * step;
+  if (dlo - *lo > 0.15 * span) *lo = std::floor(dlo / minor + 1e-9) * minor;
   *hi = std::ceil(dhi / step - 1e-9) * step;
+  if (*hi - dhi > 0.15 * span) *hi = std::ceil(dhi / minor - 1e-9) * minor;
 }
 
 }  // namespace

@@ -241,7 +241,8 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
                        const std::vector<std::string>& overrides) {
   nlohmann::ordered_json j;
   j["ballistic_limit_mps"] = r.bracketed ? nlohmann::ordered_json(r.ballistic_limit_mps) : nlohmann::ordered_json(nullptr);
-  j["bracket_mps"] = {r.lo_mps, r.hi_mps};
+  auto end = [](double v) { return v >= 0 ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
+  j["bracket_mps"] = {end(r.lo_mps), end(r.hi_mps)};
   j["bracket_note"] = "lo: highest velocity that did not perforate; hi: lowest that perforated";
   j["tolerance_mps"] = opt.tolerance_mps;
   j["bracketed"] = r.bracketed;

@@ -361,6 +361,29 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
 SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
                       const std::atomic<bool>* interrupt) {
+  // Cases are named by their varied settings only: a folder that holds cases of another
+  // base scene or --set would be silently mixed in. Refuse it.
+  for (const auto& c : todo) {
+    if (!case_finished(opt.out_dir, c)) continue;
+    std::string text;
+    try {
+      text = read_text_file(case_dir(opt.out_dir, c) + "/case.json");
+    } catch (const OutputError&) {
+      continue;  // made by hand or by an older ravel: nothing to compare
+    }
+    const auto cj = nlohmann::json::parse(text, nullptr, false);
+    if (cj.is_discarded()) continue;
+    const auto ov = cj.value("base_overrides", std::vector<std::string>{});
+    const auto scene = cj.value("base_scene", std::string());
+    if (ov != opt.overrides || scene != opt.scene_path) {
+      std::string had;
+      for (const auto& o : ov) had += " --set " + o;
+      throw StudyError("--out " + opt.out_dir + ": holds finished cases of a different sweep (scene " + scene +
+                       (had.empty() ? ", no --set" : "," + had) +
+                       "); rerun with the same scene and --set to resume, or use another folder");
+    }
+    break;  // one finished case tells
+  }
   prepare_output_dir(opt.out_dir);
   remove_stale_temporaries(opt.out_dir);
   const auto t0 = std::chrono::steady_clock::now();

@@ -7,7 +7,7 @@ WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 fails=0
 CHEAP=(--set fabric.width_mm=20 --set fabric.length_mm=20 --set projectile.diameter_mm=4
-       --set projectile.mass_g=0.5 --set solver.dt_factor=0.3 --set solver.end_time_us=600)
+       --set projectile.mass_g=0.5 --set solver.dt_factor=0.3 --set solver.end_time_us=1500)
 
 fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 

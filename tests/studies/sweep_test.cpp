@@ -153,6 +153,21 @@ TEST(Sweep, RerunResumesAndSkipsFinishedCases) {
   expect_results_match_summaries(dir, more);
 }
 
+TEST(Sweep, RefusesToMixCasesOfAnotherBaseScene) {
+  const std::string dir = scratch_dir();
+  const auto cases = cheap_cases();
+  run_sweep(cases, {cases[0]}, cheap_options(dir), kKeys);
+  auto other = cheap_options(dir);
+  other.overrides.push_back("yarn.failure_strain=0.057");
+  try {
+    run_sweep(cases, cases, other, kKeys);
+    ADD_FAILURE() << "mixed two sweeps in one folder";
+  } catch (const StudyError& e) {
+    EXPECT_NE(std::string(e.what()).find("different sweep"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(case_finished(dir, cases[1]));
+}
+
 TEST(Sweep, CaseFoldersAppearWholeOrNotAtAll) {
   const std::string dir = scratch_dir();
   const auto cases = cheap_cases();
