@@ -84,3 +84,75 @@ void draw_chart_imgui(const Chart& chart, ImVec2 size) {
 }
 
 }  // namespace ravel::studies
+
+// ---------------------------------------------------------------------------------------
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <thread>
+
+#include "sweep_runner.h"
+
+namespace ravel::studies {
+
+void draw_sweep_panel(SweepRunner& runner, const std::string& scene_path, const std::vector<std::string>& overrides) {
+  static char vary[1024] = "projectile.velocity_mps=180:500:40\nyarn.friction=0,0.2,1.0";
+  static char out_dir[512] = "sweep_out";
+  static int jobs = int(std::max(1u, std::thread::hardware_concurrency()));
+  static std::string start_error;
+  static int chart_index = 0;
+  const SweepRunner::Snapshot s = runner.snapshot();
+
+  ImGui::TextUnformatted("Vary (one key per line: key=start:stop:step or key=v1,v2,...)");
+  ImGui::BeginDisabled(s.running);
+  ImGui::InputTextMultiline("##vary", vary, sizeof vary, ImVec2(-1, ImGui::GetTextLineHeight() * 4));
+  ImGui::InputText("output folder", out_dir, sizeof out_dir);
+  ImGui::SliderInt("jobs", &jobs, 1, int(std::max(1u, std::thread::hardware_concurrency())));
+  if (ImGui::Button("Start sweep")) {
+    SweepOptions o;
+    o.scene_path = scene_path.empty() ? default_scene_path() : scene_path;
+    o.overrides = overrides;
+    o.out_dir = out_dir;
+    o.jobs = jobs;
+    std::vector<std::string> lines;
+    std::stringstream ss(vary);
+    for (std::string line; std::getline(ss, line);)
+      if (line.find_first_not_of(" \t") != std::string::npos) lines.push_back(line);
+    start_error.clear();
+    runner.start(o, lines, &start_error);
+  }
+  ImGui::EndDisabled();
+  if (s.running) {
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) runner.cancel();
+  }
+  if (!start_error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", start_error.c_str());
+  if (!s.error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s", s.error.c_str());
+
+  if (s.progress.total > 0) {
+    const float f = float(s.progress.done) / float(s.progress.total);
+    char label[128];
+    const int ran = s.progress.done - s.progress.skipped - s.progress.failed;
+    const double per_hour = s.progress.wall_time_s > 0 ? ran / (s.progress.wall_time_s / 3600) : 0;
+    std::snprintf(label, sizeof label, "%d / %d cases  (%d resumed, %d failed)  %.0f s, %.0f cases/h", s.progress.done,
+                  s.progress.total, s.progress.skipped, s.progress.failed, s.progress.wall_time_s, per_hour);
+    ImGui::ProgressBar(f, ImVec2(-1, 0), label);
+  }
+  if (s.finished)
+    ImGui::Text("done: %d run, %d resumed, %d failed in %.1f s (%.0f cases/hour); %s/results.csv", s.report.cases_run,
+                s.report.cases_skipped, s.report.cases_failed, s.report.wall_time_s, s.report.cases_per_hour, out_dir);
+
+  const auto charts = s.charts();
+  if (charts.empty()) {
+    if (!s.results.rows.empty()) ImGui::TextUnformatted("(the first varied key is not a number: no chart)");
+    return;
+  }
+  chart_index = std::min(chart_index, int(charts.size()) - 1);
+  for (int i = 0; i < int(charts.size()); ++i) {
+    if (i) ImGui::SameLine();
+    ImGui::RadioButton(charts[size_t(i)].second.y.label.c_str(), &chart_index, i);
+  }
+  draw_chart_imgui(charts[size_t(chart_index)].second);
+}
+
+}  // namespace ravel::studies

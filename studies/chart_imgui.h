@@ -5,6 +5,9 @@
 
 #include <imgui.h>
 
+#include <string>
+#include <vector>
+
 #include "chart.h"
 
 namespace ravel::studies {
@@ -12,5 +15,16 @@ namespace ravel::studies {
 // Reserve a `size` region at the cursor (ImGui::Dummy) and draw the chart into it.
 // size.x / size.y <= 0 take the available width / 60 % of it.
 void draw_chart_imgui(const Chart& chart, ImVec2 size = ImVec2(0, 0));
+
+}  // namespace ravel::studies
+
+namespace ravel::studies {
+
+class SweepRunner;
+
+// A sweep panel for the app: --vary lines, output folder, jobs, Start / Cancel, a progress
+// bar with cases per hour, and the live charts of the cases done so far. `scene_path` and
+// `overrides` are the app's current scene (a file, or "" for the default) and its edits.
+void draw_sweep_panel(SweepRunner& runner, const std::string& scene_path, const std::vector<std::string>& overrides);
 
 }  // namespace ravel::studies
