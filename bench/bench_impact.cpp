@@ -1,6 +1,7 @@
 // Benchmark: the default scene at 260 m/s, to perforation or end_time. Prints CSV.
 //   bench_impact [--set k=v ...] [--repeat N]
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -10,6 +11,7 @@
 #include "simulation.h"
 
 int main(int argc, char** argv) {
+  setenv("OMP_WAIT_POLICY", "passive", 0);  // as the ravel executable does (app/main.cpp)
   std::vector<std::string> ov{"projectile.velocity_mps=260", "output.progress=false"};
   int repeat = 1;
   std::vector<std::vector<std::string>> cases;

@@ -471,48 +471,84 @@ class SolverT final : public Solver {
   ContactGeom closest(int c) const {
     const Crossing& cr = model_.crossings[c];
     ContactGeom g;
+    const int kw = cr_kw_[c], kf = cr_kf_[c];
+    // The up to 2 segments of each yarn next to the tracked node: start point, direction,
+    // squared length (done once, each segment serves two pairs).
+    V3 p0[2], d1[2], q0[2], d2[2];
+    Real aa[2], ee[2];
+    int sws[2], sfs[2], nw = 0, nf = 0;
+    for (int sw = kw - 1; sw <= kw; ++sw) {
+      if (!seg_ok(cr.warp_yarn, sw)) continue;
+      p0[nw] = x_[ynode(cr.warp_yarn, sw)];
+      d1[nw] = x_[ynode(cr.warp_yarn, sw + 1)] - p0[nw];
+      aa[nw] = d1[nw].squaredNorm();
+      sws[nw++] = sw;
+    }
+    for (int sf = kf - 1; sf <= kf; ++sf) {
+      if (!seg_ok(cr.weft_yarn, sf)) continue;
+      q0[nf] = x_[ynode(cr.weft_yarn, sf)];
+      d2[nf] = x_[ynode(cr.weft_yarn, sf + 1)] - q0[nf];
+      ee[nf] = d2[nf].squaredNorm();
+      sfs[nf++] = sf;
+    }
+    if (nw == 0 || nf == 0) return g;
     struct Cand {
-      int sw, sf;
-      Real a, b, dist;
+      int iw, jf;
+      Real a, b, dist2;
       V3 d;
     } cand[4];
     int nc = 0;
-    Real best = Real(1e30);
-    for (int sw = cr_kw_[c] - 1; sw <= cr_kw_[c]; ++sw) {
-      if (!seg_ok(cr.warp_yarn, sw)) continue;
-      for (int sf = cr_kf_[c] - 1; sf <= cr_kf_[c]; ++sf) {
-        if (!seg_ok(cr.weft_yarn, sf)) continue;
-        Real a, b;
-        V3 pa, pb;
-        closest_points_segments(x_[ynode(cr.warp_yarn, sw)], x_[ynode(cr.warp_yarn, sw + 1)],
-                                x_[ynode(cr.weft_yarn, sf)], x_[ynode(cr.weft_yarn, sf + 1)], a, b, pa, pb);
-        const V3 d = pb - pa;
-        cand[nc] = {sw, sf, a, b, d.norm(), d};
-        best = std::min(best, cand[nc].dist);
-        ++nc;
+    Real best2 = Real(1e30);
+    for (int i = 0; i < nw; ++i)
+      for (int j = 0; j < nf; ++j) {
+        // Segment-segment closest points (Eq 8, clamped; Ericson 5.1.9), inlined with the
+        // segments' squared lengths reused.
+        const V3 r = p0[i] - q0[j];
+        const Real A = aa[i], E = ee[j], F = d2[j].dot(r);
+        const Real C = d1[i].dot(r), B = d1[i].dot(d2[j]);
+        const Real denom = A * E - B * B;
+        Real sa = denom > Real(1e-12) * A * E ? std::clamp((B * F - C * E) / denom, Real(0), Real(1)) : Real(0);
+        Real tb = (B * sa + F) / E;
+        if (tb < Real(0)) {
+          tb = 0;
+          sa = std::clamp(-C / A, Real(0), Real(1));
+        } else if (tb > Real(1)) {
+          tb = 1;
+          sa = std::clamp((B - C) / A, Real(0), Real(1));
+        }
+        Cand& q = cand[nc++];
+        q.iw = i;
+        q.jf = j;
+        q.a = sa;
+        q.b = tb;
+        q.d = (q0[j] + tb * d2[j]) - (p0[i] + sa * d1[i]);
+        q.dist2 = q.d.squaredNorm();
+        best2 = std::min(best2, q.dist2);
       }
-    }
-    if (nc == 0) return g;
     // Pairs within kTieBand * D of the closest share the contact, with weights falling
     // linearly from 1 (closest) to 0 (band edge): the contact point moves continuously
     // when two pairs swap places.
+    const Real best = std::sqrt(best2);
     const Real band = Real(kTieBand) * Real(cr.contact_distance);
+    const Real reach2 = (best + band) * (best + band);
     Real wsum = 0;
+    bool first = true;
     for (int k = 0; k < nc; ++k) {
       const Cand& q = cand[k];
-      if (q.dist == best && wsum == Real(0)) g.sw = q.sw, g.sf = q.sf, g.a = q.a, g.b = q.b, wsum = Real(1e-30);
-    }
-    wsum = 0;
-    for (int k = 0; k < nc; ++k) {
-      const Cand& q = cand[k];
-      const Real wq = Real(1) - (q.dist - best) / band;
+      if (q.dist2 == best2 && first) {
+        g.sw = sws[q.iw], g.sf = sfs[q.jf], g.a = q.a, g.b = q.b;
+        first = false;
+      }
+      if (q.dist2 >= reach2) continue;
+      const Real wq = Real(1) - (std::sqrt(q.dist2) - best) / band;
       if (wq <= Real(0)) continue;
       wsum += wq;
       g.d += wq * q.d;
-      g.ww[q.sw - (cr_kw_[c] - 1)] += wq * (Real(1) - q.a);
-      g.ww[q.sw - (cr_kw_[c] - 1) + 1] += wq * q.a;
-      g.wf[q.sf - (cr_kf_[c] - 1)] += wq * (Real(1) - q.b);
-      g.wf[q.sf - (cr_kf_[c] - 1) + 1] += wq * q.b;
+      const int iw = sws[q.iw] - (kw - 1), jf = sfs[q.jf] - (kf - 1);
+      g.ww[iw] += wq * (Real(1) - q.a);
+      g.ww[iw + 1] += wq * q.a;
+      g.wf[jf] += wq * (Real(1) - q.b);
+      g.wf[jf + 1] += wq * q.b;
     }
     const Real inv = Real(1) / wsum;
     g.d *= inv;
@@ -600,18 +636,21 @@ class SolverT final : public Solver {
       const bool last = pass == N;
 #pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
       for (int c = 0; c < nc; ++c) crossing_pass(c, alpha, last);
-      // Apply, in crossing order.
-      for (int c = 0; c < nc; ++c) {
-        const CrossingImpulse& r = impulses_[c];
-        if (r.has_n)
-          for (int k = 0; k < 6; ++k)
-            if (r.node[k] >= 0 && r.w[k] != Real(0)) apply_impulse(r.node[k], r.w[k] * r.P, dv_contact_);
-        if (r.has_f)
-          for (int k = 0; k < 4; ++k)
-            if (r.fw[k] != Real(0)) apply_impulse(r.fnode[k], r.fw[k] * r.F, dv_friction_);
-        if (r.has_s)
-          for (int k = 0; k < 6; ++k)
-            if (r.node[k] >= 0 && r.w[k] != Real(0)) shift_node(r.node[k], r.w[k] * r.S);
+      // Apply, in crossing order. Each thread owns a range of nodes and applies, in that
+      // order, the changes that fall in its range: race-free, and the same sums whatever
+      // the number of threads.
+      if (threads_ > 1) {
+#pragma omp parallel num_threads(threads_)
+        {
+#ifdef _OPENMP
+          const int t = omp_get_thread_num(), T = omp_get_num_threads();
+#else
+          const int t = 0, T = 1;
+#endif
+          apply_pass(int(long(model_.node_count) * t / T), int(long(model_.node_count) * (t + 1) / T));
+        }
+      } else {
+        apply_pass(0, model_.node_count);
       }
     }
     // Book what broke the method's assumptions, in crossing order.
@@ -637,6 +676,29 @@ class SolverT final : public Solver {
     yarn_force_ = fsum;
     sliding_count_ = sliding;
     stuck_count_ = stuck;
+  }
+
+  // Apply this pass's corrections to the nodes in [lo, hi), in crossing order.
+  void apply_pass(int lo, int hi) {
+    const int nc = int(model_.crossings.size());
+    for (int c = 0; c < nc; ++c) {
+      const CrossingImpulse& r = impulses_[c];
+      if (r.has_n)
+        for (int k = 0; k < 6; ++k) {
+          const int i = r.node[k];
+          if (i >= lo && i < hi && r.w[k] != Real(0)) apply_impulse(i, r.w[k] * r.P, dv_contact_);
+        }
+      if (r.has_f)
+        for (int k = 0; k < 4; ++k) {
+          const int i = r.fnode[k];
+          if (i >= lo && i < hi && r.fw[k] != Real(0)) apply_impulse(i, r.fw[k] * r.F, dv_friction_);
+        }
+      if (r.has_s)
+        for (int k = 0; k < 6; ++k) {
+          const int i = r.node[k];
+          if (i >= lo && i < hi && r.w[k] != Real(0)) shift_node(i, r.w[k] * r.S);
+        }
+    }
   }
 
   void apply_impulse(int i, const V3& P, std::vector<V3>& acc) {
