@@ -694,7 +694,18 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
      << num(result.runs_per_hour, "%.0f") << " runs per hour, " << opt.jobs << " jobs); velocity sweep "
      << num(velocity_wall_s, "%.0f") << " s (" << vrep.cases_run << " run, " << vrep.cases_skipped << " resumed, "
      << num(vrep.cases_per_hour, "%.0f") << " cases/h); ballistic limits " << num(limit_wall_s, "%.0f") << " s ("
-     << limit_runs << " runs); images " << num(image_wall_s, "%.0f") << " s.\n\n";
+     << limit_runs << " runs); images " << num(image_wall_s, "%.0f") << " s.\n";
+  {  // what every run cost, including runs made by earlier (resumed) invocations
+    double run_s = 0;
+    int n = 0;
+    for (const auto& r : rows)
+      if (std::isfinite(r.wall_s)) run_s += r.wall_s, ++n;
+    for (const auto& e : limits)
+      for (const auto& s : e.result.runs) run_s += s.wall_time_s, ++n;
+    md << "- All " << n << " runs behind this report (including resumed ones) took " << num(run_s, "%.0f")
+       << " s of single-run wall time, " << num(n > 0 ? run_s / n : 0, "%.1f") << " s per run on average.\n";
+  }
+  md << "\n";
 
   md << "## The paper's statements beside ravel's numbers\n\n"
      << "Verdicts use stated thresholds (below the table) and are computed, not chosen: " << result.claims_agree
