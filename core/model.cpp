@@ -179,7 +179,10 @@ Model build_model(const Scene& scene) {
   // Rest length: the crimped length sqrt(L0^2 + L1^2) of the zig-zag (paper Fig. 1). The
   // pin-jointed and single-yarn models put their nodes at z = 0, so their elements start
   // slack by the crimp and straighten before they carry load (crimp interchange, ref [8]).
-  const double crimped = single ? L0 : std::sqrt(L0 * L0 + L1 * L1);
+  // A lumped element spans k real ones and keeps their crimp: rest length k times the
+  // real crimped length (it starts slack when its own zig-zag is flatter).
+  const double L0_real = f.spacing_m;
+  const double crimped = single ? L0 : k * std::sqrt(L0_real * L0_real + L1 * L1);
   m.yarn_end_free.resize(m.yarn_count());
   m.yarn_start_mirror.assign(m.yarn_count(), -1);
   for (int yy = 0; yy < m.yarn_count(); ++yy) {
