@@ -289,6 +289,10 @@ class ViewCache {
     render::ViewOptions o = app.view_options;
     o.ui_scale = ui_scale;
     o.tube_sides = hq ? std::max(8, o.tube_sides) : 4;
+    // Lower internal resolution while busy (View panel); projectile and caption stay sharp.
+    o.render_scale = hq ? 1.0f : app.playing_render_scale;
+    // Close-ups use real tubes when still; while busy ribbons are always good enough.
+    if (!hq && o.yarn_geometry == render::YarnGeometry::automatic) o.yarn_geometry = render::YarnGeometry::ribbons;
     const auto t0 = Clock::now();
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     renderer.draw(app.view.frame, app.camera, o, 0, 0, w_, h_);
@@ -313,11 +317,12 @@ class ViewCache {
   static std::string view_key(const GuiApp& app) {
     const render::Camera& c = app.camera;
     const render::ViewOptions& o = app.view_options;
-    char b[256];
-    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g", c.target[0], c.target[1],
-                  c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view), int(o.field),
-                  int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption,
-                  o.show_colorbar, o.range_min, o.range_max);
+    char b[320];
+    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g", c.target[0],
+                  c.target[1], c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view),
+                  int(o.field), int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut,
+                  o.show_caption, o.show_colorbar, o.range_min, o.range_max, int(o.yarn_geometry),
+                  app.playing_render_scale);
     return b;
   }
 
@@ -473,6 +478,8 @@ int cmd_gui(const Args& args) {
       auto last_frame_end = t0;
       double worst_frame_ms = 0, view_ms_total = 0;
       long frame = 0;
+      long playing_frames = 0;  // UI frames while the run played, and their wall time
+      double playing_s = 0;
       double sim_at_end_us = 0;
       while (!glfwWindowShouldClose(window) && !app.quit) {
         const auto frame_start = std::chrono::steady_clock::now();
@@ -538,6 +545,10 @@ int cmd_gui(const Args& args) {
         const double frame_ms = std::chrono::duration<double, std::milli>(now - last_frame_end).count();
         last_frame_end = now;
         if (frame > 1) worst_frame_ms = std::max(worst_frame_ms, frame_ms);
+        if (frame > 1 && app.view.state == WorkerState::running) {
+          ++playing_frames;
+          playing_s += frame_ms * 1e-3;
+        }
         const bool last = frames > 0 && frame >= frames &&
                           (pause_at_us <= 0 || app.view.state != WorkerState::running ||
                            std::chrono::steady_clock::now() - t0 > std::chrono::seconds(120));
@@ -569,13 +580,19 @@ int cmd_gui(const Args& args) {
       }
       if (frames > 0) {
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        double load1 = -1;  // the machine's load: frame rates under a software GL depend on it
+        if (std::FILE* f = std::fopen("/proc/loadavg", "r")) {
+          if (std::fscanf(f, "%lf", &load1) != 1) load1 = -1;
+          std::fclose(f);
+        }
         std::printf(
-            "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms), 3D view drawn %ld times "
-            "(%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f\n",
-            frame, wall, double(frame) / wall, worst_frame_ms, view_cache.draws(),
+            "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms; while playing %.1f fps over "
+            "%.1f s), 3D view drawn %ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, "
+            "run %ld %s, mu %.2f, load %.2f\n",
+            frame, wall, double(frame) / wall, worst_frame_ms,
+            playing_s > 0 ? double(playing_frames) / playing_s : 0.0, playing_s, view_cache.draws(),
             view_ms_total / double(std::max(1L, view_cache.draws())), ImGui::GetIO().MetricsRenderVertices,
-            sim_at_end_us, app.view.run_id,
-            to_string(app.view.state), app.view.scene.yarn.friction);
+            sim_at_end_us, app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }
       worker.request_exit();

@@ -281,6 +281,32 @@ void view_section(GuiApp& app) {
   ImGui::Checkbox("section cut", &o.section_cut);
   ImGui::SameLine();
   ImGui::Checkbox("caption", &o.show_caption);
+  // Quality while playing: a software GL (no GPU) spends most of a UI frame on the fabric.
+  const float scales[] = {1.0f, 0.75f, 0.5f};
+  const char* scale_names[] = {"full", "75 %", "50 %"};
+  int current = 0;
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(app.playing_render_scale - scales[i]) < 1e-3f) current = i;
+  ImGui::TextUnformatted("resolution while playing");
+  for (int i = 0; i < 3; ++i) {
+    ImGui::SameLine();
+    if (ImGui::RadioButton(scale_names[i], current == i)) app.playing_render_scale = scales[i];
+  }
+  help_marker(
+      "The fabric is drawn at this fraction of the view's resolution while a run plays or "
+      "the mouse drags, and at full resolution once everything is still. The projectile and "
+      "the caption always stay sharp. Lower it if the window feels slow without a GPU.");
+  int geometry = int(o.yarn_geometry);
+  ImGui::TextUnformatted("yarns");
+  ImGui::SameLine();
+  if (ImGui::RadioButton("auto", geometry == 0)) o.yarn_geometry = render::YarnGeometry::automatic;
+  ImGui::SameLine();
+  if (ImGui::RadioButton("tubes", geometry == 1)) o.yarn_geometry = render::YarnGeometry::tubes;
+  ImGui::SameLine();
+  if (ImGui::RadioButton("ribbons", geometry == 2)) o.yarn_geometry = render::YarnGeometry::ribbons;
+  help_marker(
+      "Ribbons: flat strips turned to the eye and shaded as the yarn's elliptic tube, several "
+      "times cheaper to draw. Auto uses them unless you zoom in close, then real tubes.");
 }
 
 void export_section(GuiApp& app) {

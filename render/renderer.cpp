@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "render/gl.h"
@@ -202,6 +203,24 @@ float nice_ceil(float x) {
 
 }  // namespace
 
+const char* to_string(YarnGeometry g) {
+  switch (g) {
+    case YarnGeometry::automatic: return "auto";
+    case YarnGeometry::tubes: return "tubes";
+    case YarnGeometry::ribbons: return "ribbons";
+  }
+  return "?";
+}
+
+bool parse_yarn_geometry(const std::string& name, YarnGeometry* out) {
+  for (YarnGeometry g : {YarnGeometry::automatic, YarnGeometry::tubes, YarnGeometry::ribbons})
+    if (name == to_string(g)) {
+      *out = g;
+      return true;
+    }
+  return false;
+}
+
 // ---- field values ------------------------------------------------------------------------
 
 static float element_value(const Frame& f, ColorField field, std::size_t e) {
@@ -265,7 +284,8 @@ std::vector<std::string> caption_lines(const Frame& frame, const ViewOptions& op
 // ---- Renderer ------------------------------------------------------------------------------
 
 struct Renderer::Impl {
-  GLuint bg_prog = 0, tube_prog = 0, mesh_prog = 0, overlay_prog = 0;
+  GLuint bg_prog = 0, tube_prog = 0, ribbon_prog = 0, mesh_prog = 0, overlay_prog = 0,
+         upscale_prog = 0;
   GLuint empty_vao = 0;
   GLuint tube_vao = 0, ring_vbo = 0, ring_ebo = 0, inst_vbo = 0;
   int ring_sides = 0;
@@ -277,11 +297,16 @@ struct Renderer::Impl {
   int colormap_loaded = -1;
   Mesh sphere, cylinder, cone, box;
   std::vector<TubeInstance> instances;
+  std::vector<TubeInstance> uploaded;  // what inst_vbo holds
+  // Low-resolution target for ViewOptions::render_scale < 1: colour + depth textures.
+  GLuint low_fbo = 0, low_color = 0, low_depth = 0;
+  int low_w = 0, low_h = 0;
   std::vector<std::uint8_t> intact;
   OverlayBatch overlay;
   DrawStats stats;
 
   void build_ring(int sides);
+  void ensure_low_target(int w, int h);
   void load_colormap(ColorMap map);
   void draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat,
                  const Vec3& color, float shininess, float specular);
@@ -292,6 +317,8 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   Impl& r = *impl_;
   r.bg_prog = link("background.vert", "background.frag");
   r.tube_prog = link("tube.vert", "tube.frag");
+  r.ribbon_prog = link("ribbon.vert", "ribbon.frag");
+  r.upscale_prog = link("background.vert", "upscale.frag");
   r.mesh_prog = link("mesh.vert", "mesh.frag");
   r.overlay_prog = link("overlay.vert", "overlay.frag");
   glGenVertexArrays(1, &r.empty_vao);
@@ -345,7 +372,11 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 
 Renderer::~Renderer() {
   Impl& r = *impl_;
-  for (GLuint p : {r.bg_prog, r.tube_prog, r.mesh_prog, r.overlay_prog}) glDeleteProgram(p);
+  for (GLuint p : {r.bg_prog, r.tube_prog, r.ribbon_prog, r.mesh_prog, r.overlay_prog, r.upscale_prog})
+    glDeleteProgram(p);
+  if (r.low_fbo) glDeleteFramebuffers(1, &r.low_fbo);
+  GLuint low_tex[] = {r.low_color, r.low_depth};
+  glDeleteTextures(2, low_tex);
   GLuint vaos[] = {r.empty_vao, r.tube_vao, r.overlay_vao};
   glDeleteVertexArrays(3, vaos);
   GLuint bufs[] = {r.ring_vbo, r.ring_ebo, r.inst_vbo, r.overlay_vbo};
@@ -387,6 +418,38 @@ void Renderer::Impl::build_ring(int sides) {
   glBindVertexArray(0);
   ring_sides = sides;
   ring_index_count = static_cast<GLsizei>(idx.size());
+}
+
+void Renderer::Impl::ensure_low_target(int w, int h) {
+  if (low_fbo && w == low_w && h == low_h) return;
+  if (!low_fbo) {
+    glGenFramebuffers(1, &low_fbo);
+    glGenTextures(1, &low_color);
+    glGenTextures(1, &low_depth);
+  }
+  glBindTexture(GL_TEXTURE_2D, low_color);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glBindTexture(GL_TEXTURE_2D, low_depth);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, w, h, 0, GL_DEPTH_COMPONENT,
+               GL_UNSIGNED_INT, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_NONE);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  GLint previous = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &previous);
+  glBindFramebuffer(GL_FRAMEBUFFER, low_fbo);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, low_color, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, low_depth, 0);
+  glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(previous));
+  low_w = w;
+  low_h = h;
 }
 
 void Renderer::Impl::load_colormap(ColorMap map) {
@@ -453,13 +516,24 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glDisable(GL_BLEND);
 
-  if (o.show_background) {
-    glDisable(GL_DEPTH_TEST);
-    glUseProgram(r.bg_prog);
-    glUniform3fv(glGetUniformLocation(r.bg_prog, "u_top"), 1, o.background_top.data());
-    glUniform3fv(glGetUniformLocation(r.bg_prog, "u_bottom"), 1, o.background_bottom.data());
-    glBindVertexArray(r.empty_vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
+  // Lower internal resolution for the background and the fabric (render_scale < 1):
+  // only into single-sampled targets (the upscale pass writes depth per pixel).
+  GLint target_draw = 0, target_read = 0, target_samples = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target_draw);
+  glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &target_read);
+  glGetIntegerv(GL_SAMPLES, &target_samples);
+  const float scale = std::clamp(o.render_scale, 0.25f, 1.0f);
+  const bool low = scale < 0.999f && target_samples <= 1;
+  const int fw = low ? std::max(1, static_cast<int>(std::lround(w * scale))) : w;
+  const int fh = low ? std::max(1, static_cast<int>(std::lround(h * scale))) : h;
+  r.stats.fabric_width = fw;
+  r.stats.fabric_height = fh;
+  if (low) {
+    r.ensure_low_target(fw, fh);
+    glBindFramebuffer(GL_FRAMEBUFFER, r.low_fbo);
+    glViewport(0, 0, fw, fh);
+    glScissor(0, 0, fw, fh);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   }
 
   glEnable(GL_DEPTH_TEST);
@@ -488,6 +562,12 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     for (std::size_t i = 0; i < n; ++i) mirrors.push_back({mirrors[i][0], -1, 1});
   }
   r.stats.mirror_copies = static_cast<int>(mirrors.size());
+  // Nearest copy first, so the depth test rejects hidden fragments before shading them.
+  std::stable_sort(mirrors.begin(), mirrors.end(), [&](const Vec3& p, const Vec3& q) {
+    const Vec3 cp{p[0] * 0.5f * frame.half_width_m, p[1] * 0.5f * frame.half_length_m, 0};
+    const Vec3 cq{q[0] * 0.5f * frame.half_width_m, q[1] * 0.5f * frame.half_length_m, 0};
+    return length(cp - eye) < length(cq - eye);
+  });
 
   // ---- yarn tubes
   float lo = 0, hi = 1;
@@ -549,32 +629,91 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     if (sides != r.ring_sides) r.build_ring(sides);
     r.load_colormap(o.map);
 
+    // Upload only when the instances changed (a camera move redraws the same frame).
     glBindBuffer(GL_ARRAY_BUFFER, r.inst_vbo);
     const std::size_t bytes = r.instances.size() * sizeof(TubeInstance);
     if (bytes > r.inst_capacity) {
       r.inst_capacity = bytes + bytes / 2;
       glBufferData(GL_ARRAY_BUFFER, r.inst_capacity, nullptr, GL_DYNAMIC_DRAW);
+      r.uploaded.clear();
     }
-    glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, r.instances.data());
+    if (r.uploaded.size() != r.instances.size() ||
+        std::memcmp(r.uploaded.data(), r.instances.data(), bytes) != 0) {
+      glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, r.instances.data());
+      r.uploaded = r.instances;
+      r.stats.instances_uploaded = true;
+    }
 
-    glUseProgram(r.tube_prog);
-    glUniformMatrix4fv(glGetUniformLocation(r.tube_prog, "u_view_proj"), 1, GL_FALSE, vp.data());
-    glUniform2f(glGetUniformLocation(r.tube_prog, "u_half_size"), 0.5f * width, 0.5f * thick);
-    glUniform4fv(glGetUniformLocation(r.tube_prog, "u_clip_plane"), 1, clip.data());
-    glUniform3fv(glGetUniformLocation(r.tube_prog, "u_eye"), 1, eye.data());
-    glUniform3fv(glGetUniformLocation(r.tube_prog, "u_key_dir"), 1, key_dir.data());
-    glUniform3fv(glGetUniformLocation(r.tube_prog, "u_fill_dir"), 1, fill_dir.data());
+    // Yarn width on screen at the camera target decides ribbons or tubes.
+    const float view_h_m =
+        2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180.0f);
+    r.stats.yarn_width_px = view_h_m > 0 ? width / view_h_m * h : 0.0f;
+    const bool ribbons =
+        o.yarn_geometry == YarnGeometry::ribbons ||
+        (o.yarn_geometry == YarnGeometry::automatic && r.stats.yarn_width_px < o.tube_min_px);
+    r.stats.ribbons = ribbons;
+    const GLuint prog = ribbons ? r.ribbon_prog : r.tube_prog;
+
+    glUseProgram(prog);
+    glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_proj"), 1, GL_FALSE, vp.data());
+    glUniform2f(glGetUniformLocation(prog, "u_half_size"), 0.5f * width, 0.5f * thick);
+    glUniform4fv(glGetUniformLocation(prog, "u_clip_plane"), 1, clip.data());
+    glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, eye.data());
+    glUniform3fv(glGetUniformLocation(prog, "u_key_dir"), 1, key_dir.data());
+    glUniform3fv(glGetUniformLocation(prog, "u_fill_dir"), 1, fill_dir.data());
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, r.colormap_tex);
-    glUniform1i(glGetUniformLocation(r.tube_prog, "u_colormap"), 0);
+    glUniform1i(glGetUniformLocation(prog, "u_colormap"), 0);
     glBindVertexArray(r.tube_vao);
-    const GLint mirror_loc = glGetUniformLocation(r.tube_prog, "u_mirror");
+    const GLint mirror_loc = glGetUniformLocation(prog, "u_mirror");
+    if (ribbons) glDisable(GL_CULL_FACE);  // a ribbon always faces the eye; either winding
     for (const Vec3& m : mirrors) {
       glUniform3fv(mirror_loc, 1, m.data());
-      glDrawElementsInstanced(GL_TRIANGLES, r.ring_index_count, GL_UNSIGNED_SHORT, nullptr,
-                              static_cast<GLsizei>(r.instances.size()));
+      if (ribbons)
+        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(r.instances.size()));
+      else
+        glDrawElementsInstanced(GL_TRIANGLES, r.ring_index_count, GL_UNSIGNED_SHORT, nullptr,
+                                static_cast<GLsizei>(r.instances.size()));
     }
+    glEnable(GL_CULL_FACE);
     r.stats.tubes_drawn = static_cast<int>(r.instances.size() * mirrors.size());
+  }
+
+  // Background after the fabric: only where nothing was drawn (depth still cleared).
+  auto draw_background = [&]() {
+    if (!o.show_background) return;
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glUseProgram(r.bg_prog);
+    glUniform3fv(glGetUniformLocation(r.bg_prog, "u_top"), 1, o.background_top.data());
+    glUniform3fv(glGetUniformLocation(r.bg_prog, "u_bottom"), 1, o.background_bottom.data());
+    glBindVertexArray(r.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+  };
+  if (low) {
+    draw_background();
+    // Back to the caller's target; upscale colour and depth into the viewport.
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(target_draw));
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, static_cast<GLuint>(target_read));
+    glViewport(x, y, w, h);
+    glScissor(x, y, w, h);
+    glDisable(GL_CLIP_DISTANCE0);
+    glDepthFunc(GL_ALWAYS);
+    glUseProgram(r.upscale_prog);
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, r.low_color);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, r.low_depth);
+    glUniform1i(glGetUniformLocation(r.upscale_prog, "u_color"), 0);
+    glUniform1i(glGetUniformLocation(r.upscale_prog, "u_depth"), 1);
+    glUniform2f(glGetUniformLocation(r.upscale_prog, "u_uv_scale"), 1.0f, 1.0f);
+    glBindVertexArray(r.empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glActiveTexture(GL_TEXTURE0);
+    glDepthFunc(GL_LESS);
+    glEnable(GL_CLIP_DISTANCE0);
   }
 
   // ---- clamps and projectile
@@ -630,6 +769,7 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
   }
   glEnable(GL_CULL_FACE);
   glDisable(GL_CLIP_DISTANCE0);
+  if (!low) draw_background();
 
   // ---- overlay
   glDisable(GL_DEPTH_TEST);

@@ -90,6 +90,17 @@ Camera fitted_camera(const Frame& frame, ViewPreset view, float aspect);
 
 // ---------------------------------------------------------------------------------------
 // What to draw and how.
+
+// How yarn elements are drawn. `tubes`: instanced tubes of `tube_sides` sides. `ribbons`:
+// flat strips turned towards the eye whose fragment shader rebuilds the elliptic tube's
+// normal per pixel: the same outline and (smoother) shading at 4 vertices per element
+// instead of 2 x sides, several times cheaper under a software GL. `automatic`: ribbons
+// unless the yarn is wider on screen than `tube_min_px`, then tubes (close-ups, where
+// the real geometry of joints and cut ends shows).
+enum class YarnGeometry { automatic, tubes, ribbons };
+const char* to_string(YarnGeometry g);
+bool parse_yarn_geometry(const std::string& name, YarnGeometry* out);
+
 struct ViewOptions {
   ViewPreset view = ViewPreset::oblique;  // used by the headless helpers to build a Camera;
                                           // `section` also cuts the scene (see below)
@@ -118,6 +129,14 @@ struct ViewOptions {
   float yarn_width_m = 0.0f;
   float yarn_thickness_m = 0.0f;
   int tube_sides = 8;  // 4..16
+  YarnGeometry yarn_geometry = YarnGeometry::tubes;
+  float tube_min_px = 16.0f;  // automatic: tubes when the yarn is at least this wide on screen
+
+  // Draw the background and the fabric at this fraction of the viewport's resolution and
+  // upscale them (0.25..1; 1 = off). The projectile, the clamps and the overlay are still
+  // drawn at full resolution, so they stay crisp. For interactive views while a run plays;
+  // exported images keep 1.
+  float render_scale = 1.0f;
 
   float ui_scale = 0.0f;  // text / colour-bar scale; 0 = from the viewport height
 
@@ -132,6 +151,10 @@ struct DrawStats {
   int mirror_copies = 1;    // 1, 2 or 4
   float yarn_width_m = 0, yarn_thickness_m = 0;
   float range_min = 0, range_max = 0;  // colour range actually used
+  bool ribbons = false;        // yarns drawn as ribbons (else tubes)
+  float yarn_width_px = 0;     // yarn width on screen at the camera target
+  int fabric_width = 0, fabric_height = 0;  // resolution the fabric was drawn at
+  bool instances_uploaded = false;  // false when the instance buffer already held them
 };
 
 // The colour range a field uses for a frame under `options`.
