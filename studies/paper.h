@@ -27,7 +27,8 @@ struct PaperPlan {
   double limit_tolerance_mps = 1;
   double velocity_end_time_us = 400;
   double limit_end_time_us = 3000;
-  std::vector<std::string> extra_overrides;    // what quick mode changes
+  std::vector<std::string> velocity_overrides; // what quick mode changes for Fig. 8, 11-15
+  std::vector<std::string> limit_overrides;    // ... and for the BL searches (Fig. 16, 17)
   std::string description;                     // one line for charts and the report
 };
 
