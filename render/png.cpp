@@ -1,12 +1,31 @@
 // PNG output through stb_image_write, written atomically (temp name, then rename).
+// The deflate step is zlib's (level 3) instead of stb's own: 3-4 times faster for the
+// same size class (stb's compressor was about 140 ms of a 1600x1200 snapshot).
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "render/renderer.h"
 
+namespace {
+unsigned char* zlib_compress(unsigned char* data, int data_len, int* out_len, int /*quality*/) {
+  uLongf len = compressBound(static_cast<uLong>(data_len));
+  auto* out = static_cast<unsigned char*>(std::malloc(len));  // stb frees it with STBIW_FREE
+  if (!out) return nullptr;
+  if (compress2(out, &len, data, static_cast<uLong>(data_len), 3) != Z_OK) {
+    std::free(out);
+    return nullptr;
+  }
+  *out_len = static_cast<int>(len);
+  return out;
+}
+}  // namespace
+
+#define STBIW_ZLIB_COMPRESS zlib_compress
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_STATIC
 #include <stb/stb_image_write.h>
