@@ -129,7 +129,7 @@ struct ViewOptions {
   float yarn_width_m = 0.0f;
   float yarn_thickness_m = 0.0f;
   int tube_sides = 8;  // 4..16
-  YarnGeometry yarn_geometry = YarnGeometry::tubes;
+  YarnGeometry yarn_geometry = YarnGeometry::automatic;
   float tube_min_px = 16.0f;  // automatic: tubes when the yarn is at least this wide on screen
 
   // Draw the background and the fabric at this fraction of the viewport's resolution and
