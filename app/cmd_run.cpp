@@ -5,12 +5,16 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "cli.h"
 #include "commands.h"
 #include "results.h"
+#include "model.h"
 #include "simulation.h"
+#include "solver.h"
 #ifdef RAVEL_HAVE_SNAPSHOT
 #include "render/frame_recorder.h"  // --frames / --vtk (render/ owner)
 #endif
@@ -27,6 +31,39 @@ std::atomic<bool>& interrupt_flag() { return g_interrupt; }
 void install_signal_handlers() {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
+}
+
+// Test hook (docs/robustness.md): RAVEL_TEST_FAULT=nan@STEP or search_lost@STEP breaks the
+// state after that many steps, so the CLI tests can drive each fault class to its exit
+// code. Faults a scene can cause (energy runaway, projectile leaving the domain) are tested
+// with scenes instead.
+void inject_test_fault(Simulation& sim) {
+  const char* spec = std::getenv("RAVEL_TEST_FAULT");
+  if (!spec || !*spec) return;
+  const std::string s = spec;
+  const auto at = s.find('@');
+  const std::string what = s.substr(0, at);
+  const long step = at == std::string::npos ? 0 : std::atol(s.c_str() + at + 1);
+  while (sim.step_count() < step && sim.step()) {}
+  if (sim.finished()) return;
+  Solver& solver = sim.solver();
+  const Model& m = solver.model();
+  if (what == "nan") {
+    solver.set_position(m.yarn_node(0, m.yarn_size(0) / 2), Vec3d::Constant(std::nan("")));
+  } else if (what == "search_lost") {
+    // Every weft yarn jumps 2.5 node spacings along itself: a rigid shift (no strain, no
+    // kinetic energy), so only the nearest-pair search notices.
+    for (int y = 0; y < m.yarn_count(); ++y) {
+      if (m.yarn_family[y] != weft) continue;
+      for (int k = 0; k < m.yarn_size(y); ++k) {
+        const int i = m.yarn_node(y, k);
+        solver.set_position(i, solver.position(i) + Vec3d(2.5 * sim.scene().fabric.spacing_m, 0, 0));
+      }
+    }
+  } else {
+    std::fprintf(stderr, "ravel: RAVEL_TEST_FAULT=%s: unknown fault (nan@STEP, search_lost@STEP)\n", spec);
+    std::exit(exit_usage);
+  }
 }
 
 void print_summary_line(const Summary& s, const std::string& out_dir) {
@@ -66,6 +103,8 @@ int cmd_run(const Args& args) {
       throw UsageError("--frames / --vtk need a build with the renderer (RAVEL_BUILD_GUI=ON)");
 #endif
     Scene scene = load_scene_from(a);
+    // Said before a run that may take hours, not only in the summary at its end.
+    for (const auto& w : scene.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     Simulation sim(scene);
@@ -74,6 +113,7 @@ int cmd_run(const Args& args) {
     if (!recorder) throw OutputError(rec_error);
     bool rec_ok = recorder->on_sample(sim, &rec_error);  // the initial state
 #endif
+    inject_test_fault(sim);
     const bool progress = scene.output.progress && !has_switch(a, "quiet") && isatty(fileno(stderr));
     auto last = std::chrono::steady_clock::now();
     sim.run(&g_interrupt, [&](const Simulation& s) {

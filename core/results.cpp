@@ -124,6 +124,11 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["status"] = to_string(s.status);
   j["end_reason"] = to_string(s.end_reason);
   j["diagnosis"] = s.diagnosis;
+  // A diverged run: what stopped it, in which step, at which simulated time (else null).
+  const bool fault = s.status == RunStatus::diverged && !s.divergence_cause.empty();
+  j["divergence_cause"] = fault ? nlohmann::ordered_json(s.divergence_cause) : nlohmann::ordered_json(nullptr);
+  j["divergence_step"] = fault ? nlohmann::ordered_json(s.divergence_step) : nlohmann::ordered_json(nullptr);
+  j["divergence_time_s"] = fault ? nlohmann::ordered_json(s.divergence_time_s) : nlohmann::ordered_json(nullptr);
   j["perforated"] = s.perforated;
   j["impact_velocity_mps"] = s.impact_velocity_mps;
   j["residual_velocity_mps"] = s.residual_velocity_mps;

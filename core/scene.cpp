@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
@@ -94,6 +95,12 @@ struct KeyDef {
   }
 
 constexpr double inf = std::numeric_limits<double>::infinity();
+// Node mass vs rho A L: warn beyond 25 %, refuse beyond a factor 3.
+constexpr double kNodeMassWarnFraction = 0.25;
+constexpr double kNodeMassErrorFactor = 3.0;
+// Estimated time steps of a run: warn above, refuse above.
+constexpr double kManySteps = 2e7;
+constexpr double kMaxSteps = 1e9;
 
 std::vector<KeyDef> make_defs() {
   std::vector<KeyDef> defs;
@@ -204,6 +211,7 @@ std::vector<KeyDef> make_defs() {
   NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true, 1e5, solver.end_time_s);
   INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
   NUM("solver.max_balance_error", "", "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true, 1e3, solver.max_balance_error);
+  NUM("solver.max_search_lost", "", "a run in which the nearest-pair search loses track (yarns sliding more than one node in one step) at more than this fraction of the crossings in one step is declared diverged; 1 = never", 1, 0, false, 1.0, solver.max_search_lost);
   NUM("output.history_interval_us", "us", "time between rows of history.csv", 1e-6, 0, true, 1e6, output.history_interval_s);
   BOOL("output.progress", "print a progress line on a terminal", output.progress);
   return defs;
@@ -259,6 +267,63 @@ std::string fmt(double v) {
   return o.str();
 }
 
+// Values that look like they were given in another unit: the usual range of a key (in
+// the key's own unit) and the units people mix it up with. A value outside the usual
+// range that lands inside it once converted from one of those units gets a hint.
+struct UnitSlip {
+  const char* key;
+  double lo, hi;  // usual range, in the key's unit
+  std::vector<std::pair<const char*, double>> alt;  // (unit, factor to the key's unit)
+};
+
+const std::vector<UnitSlip>& unit_slips() {
+  static const std::vector<UnitSlip> t = {
+      {"fabric.width_mm", 2, 2000, {{"m", 1e3}, {"cm", 10}}},
+      {"fabric.length_mm", 2, 2000, {{"m", 1e3}, {"cm", 10}}},
+      {"fabric.spacing_mm", 0.05, 20, {{"m", 1e3}, {"um", 1e-3}}},
+      {"fabric.crossing_gap_mm", 0.005, 5, {{"m", 1e3}, {"um", 1e-3}}},
+      {"fabric.thickness_mm", 0.01, 20, {{"m", 1e3}, {"um", 1e-3}}},
+      {"projectile.diameter_mm", 0.5, 300, {{"m", 1e3}, {"cm", 10}}},
+      {"projectile.length_mm", 0.5, 1000, {{"m", 1e3}, {"cm", 10}}},
+      {"projectile.mass_g", 0.05, 1e5, {{"kg", 1e3}, {"mg", 1e-3}}},
+      {"projectile.velocity_mps", 1, 5000, {{"km/s", 1e3}}},
+      {"yarn.k1_pa", 1e8, 1e13, {{"GPa", 1e9}, {"MPa", 1e6}}},
+      {"yarn.k2_pa", 1e8, 1e14, {{"GPa", 1e9}, {"MPa", 1e6}}},
+      {"yarn.modulus_pa", 1e8, 1e13, {{"GPa", 1e9}, {"MPa", 1e6}}},
+      {"yarn.density_kg_m3", 100, 25000, {{"g/cm^3", 1e3}}},
+      {"yarn.area_m2", 1e-12, 1e-4, {{"mm^2", 1e-6}}},
+      {"yarn.failure_strain", 1e-3, 1, {{"%", 1e-2}}},
+      {"solver.end_time_us", 0.5, 1e5, {{"s", 1e6}, {"ms", 1e3}, {"ns", 1e-3}}},
+      {"output.history_interval_us", 1e-3, 1e3, {{"s", 1e6}, {"ns", 1e-3}}},
+  };
+  return t;
+}
+
+// "" or "; it looks like a value in m: 0.000844 m = 0.844 mm".
+std::string units_hint(const std::string& key, double v) {
+  for (const auto& u : unit_slips()) {
+    if (key != u.key) continue;
+    if (!(v > 0) || (v >= u.lo && v <= u.hi)) return "";
+    for (const auto& [unit, factor] : u.alt) {
+      const double c = v * factor;
+      if (c >= u.lo && c <= u.hi) {
+        const auto* d = find_def(key);
+        const std::string own = d && !d->unit.empty() ? d->unit : "";
+        return "; it looks like a value in " + std::string(unit) + " (" + fmt(v) + " " + unit + " = " + fmt(c) +
+               (own.empty() ? "" : " " + own) + "; the key is in " + (own.empty() ? "plain numbers" : own) + ")";
+      }
+    }
+    return "";
+  }
+  return "";
+}
+
+std::string fmt3(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", v);
+  return b;
+}
+
 // Apply one value to the scene, with the key's checks. `raw` is the value as the user
 // wrote it (for messages).
 void apply_number(Scene& s, const KeyDef& d, double v, const std::string& where) {
@@ -272,12 +337,40 @@ void apply_number(Scene& s, const KeyDef& d, double v, const std::string& where)
     if (below && d.min == 0) range = d.min_exclusive ? "must be positive" : "must not be negative";
     else if (below) range = std::string("must be ") + (d.min_exclusive ? "> " : ">= ") + fmt(d.min);
     else range = "must be <= " + fmt(d.max);
-    throw SceneError(d.key, where, range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit));
+    throw SceneError(d.key, where, range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit) + units_hint(d.key, v));
   }
   d.set_number(s, v * d.scale);
 }
 
+// Well-formed UTF-8 (no overlong forms, no surrogates, nothing past U+10FFFF): what a
+// TOML file can hold, so that every text value can be written back to scene.toml.
+bool valid_utf8(const std::string& v) {
+  size_t i = 0;
+  while (i < v.size()) {
+    const unsigned char c = v[i];
+    int n;
+    unsigned cp;
+    if (c < 0x80) n = 0, cp = c;
+    else if ((c >> 5) == 0x6) n = 1, cp = c & 0x1f;
+    else if ((c >> 4) == 0xe) n = 2, cp = c & 0x0f;
+    else if ((c >> 3) == 0x1e) n = 3, cp = c & 0x07;
+    else return false;
+    if (i + n >= v.size() && n > 0) return false;
+    for (int k = 1; k <= n; ++k) {
+      const unsigned char cc = v[i + k];
+      if ((cc >> 6) != 0x2) return false;
+      cp = (cp << 6) | (cc & 0x3f);
+    }
+    static const unsigned min_cp[] = {0, 0x80, 0x800, 0x10000};
+    if (cp < min_cp[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return false;
+    i += n + 1;
+  }
+  return true;
+}
+
 void apply_text(Scene& s, const KeyDef& d, const std::string& v, const std::string& where) {
+  if (!valid_utf8(v) || v.find('\0') != std::string::npos)
+    throw SceneError(d.key, where, "is not valid UTF-8 text");
   if (!d.choices.empty() && std::find(d.choices.begin(), d.choices.end(), v) == d.choices.end()) {
     std::string list;
     for (const auto& c : d.choices) list += (list.empty() ? "" : ", ") + c;
@@ -304,6 +397,7 @@ void apply_node(Scene& s, const std::string& key, const toml::node& node, const 
   std::string where = file + ":" + std::to_string(node.source().begin.line);
   const KeyDef* d = find_def(key);
   if (!d) throw SceneError(key, where, "unknown key" + did_you_mean(key));
+  s.origin[key] = where;
   switch (d->type) {
     case Type::number:
     case Type::integer:
@@ -360,6 +454,7 @@ void apply_override(Scene& s, const std::string& kv) {
   trim(val);
   const KeyDef* d = find_def(key);
   if (!d) throw SceneError(key, "--set", "unknown key" + did_you_mean(key));
+  s.origin[key] = "--set";
   switch (d->type) {
     case Type::number:
     case Type::integer: {
@@ -430,52 +525,161 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 
 void validate_scene(Scene& s) {
   s.warnings.clear();
-  const std::string w = s.source.empty() ? "scene" : s.source;
+  const std::string file = s.source.empty() ? "scene" : s.source;
+  // Where a key's value came from: its line, `--set`, or the file when it kept its default.
+  auto where = [&](const std::string& key) {
+    auto it = s.origin.find(key);
+    return it != s.origin.end() ? it->second : file;
+  };
+  // A hard error about `key`, with a units hint when its value looks like another unit.
+  auto fail = [&](const std::string& key, const std::string& problem) {
+    std::string hint;
+    if (const KeyDef* d = find_def(key); d && d->get_number) hint = units_hint(key, d->get_number(s) / d->scale);
+    throw SceneError(key, where(key), problem + hint);
+  };
   // Non-negative / positive / NaN checks of every value (overrides applied to defaults,
   // values that came from code rather than text).
   for (const auto& d : defs()) {
     if (!d.get_number) continue;
     double v = d.get_number(s) / d.scale;
     if (d.type == Type::boolean) continue;
-    apply_number(s, d, v, w);  // re-applies the same value: validates it
+    apply_number(s, d, v, where(d.key));  // re-applies the same value: validates it
   }
   const auto& f = s.fabric;
+  const auto& p = s.projectile;
   const double L0 = f.spacing_m * f.yarns_per_element;
   if (f.weave == Weave::plain) {
     if (f.width_m < 2 * L0 || f.length_m < 2 * L0)
-      throw SceneError("fabric.width_mm", w, "the fabric must span at least two yarn spacings (fabric.spacing_mm x fabric.yarns_per_element) each way");
+      fail(f.width_m < 2 * L0 ? "fabric.width_mm" : "fabric.length_mm",
+           "the fabric must span at least two yarn spacings (fabric.spacing_mm x fabric.yarns_per_element) each way");
     if (f.width_m / L0 > 4000 || f.length_m / L0 > 4000)
-      throw SceneError("fabric.spacing_mm", w, "more than 4000 yarns per direction; this would not fit in memory");
-  } else if (f.length_m < 2 * L0) {
-    throw SceneError("fabric.length_mm", w, "the yarn must span at least two node spacings");
+      fail("fabric.spacing_mm", "more than 4000 yarns per direction (" + fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
+                                    "); this would not fit in memory");
+  } else {
+    if (f.length_m < 2 * L0) fail("fabric.length_mm", "the yarn must span at least two node spacings");
+    if (f.length_m / L0 > 1e6)
+      fail("fabric.spacing_mm", "more than a million nodes along the yarn (" + fmt(std::round(f.length_m / L0)) + ")");
   }
   if (f.crossing_gap_m > L0)
-    throw SceneError("fabric.crossing_gap_mm", w, "L1 larger than the node spacing L0 is not a woven fabric");
-  const auto& p = s.projectile;
-  const double half_w = f.weave == Weave::plain ? f.width_m / 2 : f.length_m / 2;
-  if (std::abs(p.offset_x_m) + p.diameter_m / 2 >= (f.weave == Weave::plain ? f.width_m / 2 : half_w) ||
-      std::abs(p.offset_y_m) + p.diameter_m / 2 >= f.length_m / 2)
-    throw SceneError("projectile.diameter_mm", w, "the projectile does not fit inside the fabric at the strike point (check diameter and offsets)");
+    fail("fabric.crossing_gap_mm", "L1 larger than the node spacing L0 is not a woven fabric");
+  // The projectile against the fabric as a whole (after the fabric itself): a clearer message than "does not
+  // fit at the strike point" when no strike point could work.
+  const double fabric_min = f.weave == Weave::plain ? std::min(f.width_m, f.length_m) : f.length_m;
+  if (p.diameter_m >= fabric_min)
+    fail("projectile.diameter_mm", "the projectile (" + fmt(p.diameter_m * 1e3) + " mm) is larger than the fabric (" +
+                                       (f.weave == Weave::plain ? fmt(f.width_m * 1e3) + " x " + fmt(f.length_m * 1e3)
+                                                                : fmt(f.length_m * 1e3)) +
+                                       " mm); make the fabric larger or the projectile smaller");
+  const double half_x = f.weave == Weave::plain ? f.width_m / 2 : f.length_m / 2;
+  if (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x || std::abs(p.offset_y_m) + p.diameter_m / 2 >= f.length_m / 2) {
+    const bool off = p.offset_x_m != 0 || p.offset_y_m != 0;
+    fail(off ? (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x ? "projectile.offset_x_mm" : "projectile.offset_y_mm")
+             : "projectile.diameter_mm",
+         "the projectile does not fit inside the fabric at the strike point (check diameter and offsets)");
+  }
   if (s.solver.dt_factor > 1.0)
     s.warnings.push_back("solver.dt_factor = " + fmt(s.solver.dt_factor) +
                          " is above 1: beyond the explicit stability limit of Eq 4; the run will likely diverge");
+  // The Zener constants are a fit to Gu's tests up to 5.7 % strain; far beyond that the
+  // model is extrapolating (the hard limit, 1, is in the key table).
   if (s.yarn.material == Material::zener && s.yarn.failure_strain > 0.2)
     s.warnings.push_back("yarn.failure_strain = " + fmt(s.yarn.failure_strain) +
                          " is beyond the small-strain range the Zener fit (Gu's data, up to 5.7 %) covers");
-  // Node mass against density x area x element length (the paper's m = rho A L).
+  // Node mass against density x area x element length (the paper's m = rho A L): more
+  // than 25 % off warns, more than a factor 3 is an error.
   const double elem_len = std::sqrt(f.spacing_m * f.spacing_m + f.crossing_gap_m * f.crossing_gap_m);
   const double m_expected = s.yarn.density_kg_m3 * s.yarn.area_m2 * elem_len;
   const double ratio = f.node_mass_kg / m_expected;
-  if (ratio > 3 || ratio < 1.0 / 3)
-    throw SceneError("fabric.node_mass_g", w,
-                     "node mass " + fmt(f.node_mass_kg * 1e3) + " g is inconsistent with density x area x element length = " +
-                         fmt(m_expected * 1e3) + " g (more than 3x apart)");
-  if (ratio > 1.25 || ratio < 0.8)
+  if (ratio > kNodeMassErrorFactor || ratio < 1.0 / kNodeMassErrorFactor) {
+    const std::string problem = "node mass " + fmt3(f.node_mass_kg * 1e3) +
+                                " g is inconsistent with density x area x element length = " + fmt3(m_expected * 1e3) +
+                                " g (more than " + fmt(kNodeMassErrorFactor) + "x apart)";
+    // Blame the value that looks like a unit slip, if one does.
+    for (const char* key : {"yarn.density_kg_m3", "yarn.area_m2", "fabric.spacing_mm"}) {
+      const KeyDef* d = find_def(key);
+      if (!units_hint(key, d->get_number(s) / d->scale).empty()) fail(key, problem);
+    }
+    std::string hint;
+    if (ratio / 1e3 > 0.8 && ratio / 1e3 < 1.25) hint = "; it looks like a value in mg (the key is in g)";
+    if (ratio * 1e3 > 0.8 && ratio * 1e3 < 1.25) hint = "; it looks like a value in kg (the key is in g)";
+    throw SceneError("fabric.node_mass_g", where("fabric.node_mass_g"), problem + hint);
+  }
+  if (ratio > 1 + kNodeMassWarnFraction || ratio < 1 / (1 + kNodeMassWarnFraction))
     s.warnings.push_back("fabric.node_mass_g differs from density x area x element length by " +
-                         fmt(std::round((ratio - 1) * 100)) + " %");
-  if (f.weave == Weave::plain && s.projectile.diameter_m > 0.9 * std::min(f.width_m, f.length_m))
+                         fmt(std::round((ratio - 1) * 100)) + " % (tolerance " + fmt(kNodeMassWarnFraction * 100) + " %)");
+  if (f.weave == Weave::plain && p.diameter_m > 0.9 * std::min(f.width_m, f.length_m))
     s.warnings.push_back("the projectile is nearly as large as the fabric");
+  // Run length: dt = alpha L / c (Eq 4) with the shortest element about L0. A run that
+  // needs billions of steps is almost always a unit slip in a modulus, density or time.
+  const double E = s.yarn.material == Material::zener ? s.yarn.k1_pa : s.yarn.modulus_pa;
+  const double c = std::sqrt(E / s.yarn.density_kg_m3);
+  const double steps = s.solver.end_time_s / (s.solver.dt_factor * std::min(L0, elem_len) / c);
+  const std::string modulus_key = s.yarn.material == Material::zener ? "yarn.k1_pa" : "yarn.modulus_pa";
+  if (steps < 2)
+    fail(modulus_key, "one time step (dt = alpha L0 / c = " + fmt3(s.solver.end_time_s / steps * 1e6) +
+                          " us, wave speed c = " + fmt3(c) + " m/s) is longer than the run (solver.end_time_us = " +
+                          fmt3(s.solver.end_time_s * 1e6) + "); check the modulus, density and end time");
+  if (steps > kMaxSteps)
+    fail(modulus_key, "this scene would need about " + fmt3(steps) + " time steps (dt = alpha L0 / c with c = " +
+                          fmt3(c) + " m/s) to reach solver.end_time_us; check the modulus, density and end time");
+  if (steps > kManySteps)
+    s.warnings.push_back("the run needs about " + fmt3(steps) + " time steps; expect it to take long");
+  // The projectile should not cross the fabric in a step or two: contact is found from
+  // positions at whole steps.
+  const double dt_est = s.solver.dt_factor * std::min(L0, elem_len) / c;
+  if (p.velocity_mps * dt_est > f.thickness_m)
+    s.warnings.push_back("the projectile moves " + fmt3(p.velocity_mps * dt_est * 1e3) +
+                         " mm per time step, more than the fabric thickness (" + fmt3(f.thickness_m * 1e3) +
+                         " mm): contact may be missed; lower solver.dt_factor");
+  // Values that look like they were given in another unit, and were not already refused.
+  for (const auto& u : unit_slips()) {
+    const KeyDef* d = find_def(u.key);
+    if (!d || !d->get_number) continue;
+    if (std::string h = units_hint(u.key, d->get_number(s) / d->scale); !h.empty())
+      s.warnings.push_back(std::string(u.key) + " = " + fmt(d->get_number(s) / d->scale) + (d->unit.empty() ? "" : " " + d->unit) +
+                           " is far outside the usual " + fmt(u.lo) + " .. " + fmt(u.hi) +
+                           (d->unit.empty() ? "" : " " + d->unit) + h);
+  }
 }
+
+namespace {
+// A TOML basic string: quotes, backslashes and control characters escaped, so any name
+// reads back as itself.
+std::string toml_string(const std::string& v) {
+  std::string o = "\"";
+  for (unsigned char ch : v) {
+    switch (ch) {
+      case '"': o += "\\\""; break;
+      case '\\': o += "\\\\"; break;
+      case '\n': o += "\\n"; break;
+      case '\t': o += "\\t"; break;
+      case '\r': o += "\\r"; break;
+      default:
+        if (ch < 0x20 || ch == 0x7f) {
+          char b[8];
+          std::snprintf(b, sizeof b, "\\u%04X", ch);
+          o += b;
+        } else {
+          o += char(ch);
+        }
+    }
+  }
+  return o + "\"";
+}
+
+// The shortest decimal (12 to 17 digits) of si / scale that reads back as the same SI
+// value, so that the written scene.toml reproduces a run bit for bit.
+std::string fmt_exact(double si, double scale) {
+  std::string best;
+  for (int digits = 12; digits <= 17; ++digits) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.*g", digits, si / scale);
+    best = b;
+    if (std::strtod(b, nullptr) * scale == si) break;
+  }
+  return best;
+}
+}  // namespace
 
 std::string scene_to_toml(const Scene& s) {
   std::ostringstream o;
@@ -491,13 +695,13 @@ std::string scene_to_toml(const Scene& s) {
     }
     o << name << " = ";
     if (d.type == Type::text) {
-      o << '"' << d.get_text(s) << '"';
+      o << toml_string(d.get_text(s));
     } else if (d.type == Type::boolean) {
       o << (d.get_number(s) != 0 ? "true" : "false");
     } else if (d.type == Type::integer) {
       o << static_cast<long long>(d.get_number(s));
     } else {
-      std::string v = fmt(d.get_number(s) / d.scale);
+      std::string v = fmt_exact(d.get_number(s), d.scale);
       if (v.find_first_of(".eE") == std::string::npos && v.find("inf") == std::string::npos) v += ".0";
       o << v;
     }

@@ -77,6 +77,7 @@ struct SolverParams {
   double end_time_s = 150e-6;
   int threads = 1;                  // 0 = all cores
   double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
+  double max_search_lost = 0.01;    // nearest-pair search lost at more than this fraction of crossings in one step -> diverged
 };
 
 struct OutputParams {
@@ -93,6 +94,9 @@ struct Scene {
   SolverParams solver;
   OutputParams output;
   std::vector<std::string> warnings;  // physically questionable but allowed settings
+  // Where each key's value came from (`scene.toml:12`, `--set`), for messages from checks
+  // that run after parsing. Keys not listed kept their built-in default.
+  std::map<std::string, std::string> origin;
 };
 
 // An error in a scene: the key (`projectile.mass_g`), where it came from

@@ -37,6 +37,9 @@ namespace {
 // A perforation is confirmed when the projectile has been free of every node for this long
 // while still moving forward, and no node lies ahead of it within its silhouette.
 constexpr double kPerforationConfirm_s = 3e-6;
+// solver.max_search_lost never trips on fewer crossings than this in one step (a small
+// patch has a few hundred crossings; one lost pair is a warning, not a divergence).
+constexpr double kMinSearchLost = 4;
 
 std::string fmt(const char* f, double v) {
   char b[96];
@@ -57,6 +60,10 @@ struct Simulation::Impl {
   double perforation_time = -1;
   double wall_s = 0;
   std::vector<std::string> warnings;
+  std::string fault_cause;
+  long fault_step = -1;
+  double fault_time = -1;
+  long search_lost_before = 0;  // diagnostics().skipped_nodes after the previous step
 
   const Model& model() const { return solver->model(); }
 
@@ -162,8 +169,27 @@ struct Simulation::Impl {
       worst_balance = std::max(worst_balance, std::abs(history.back().balance_error));
     }
     if (solver->diverged()) {
+      fault_cause = solver->divergence_cause();
+      fault_step = solver->divergence_step();
+      fault_time = solver->divergence_time();
       finish(RunStatus::diverged, EndReason::diverged, solver->divergence() + ". " + advice());
       return false;
+    }
+    // Nearest-pair search lost (SPEC §4): the 3 x 3 search of Fig. 2 assumes yarns slide at
+    // most one node per step. A few crossings past that is a warning in the summary; at
+    // many crossings in one step the contact state is no longer the model's.
+    const long lost_total = solver->diagnostics().skipped_nodes;
+    const long lost_now = lost_total - search_lost_before;
+    search_lost_before = lost_total;
+    if (lost_now > 0 && scene.solver.max_search_lost < 1) {
+      const double limit = std::max(kMinSearchLost, scene.solver.max_search_lost * double(model().crossings.size()));
+      if (double(lost_now) > limit) {
+        diverge("search_lost", "the nearest-pair search lost track at " + std::to_string(lost_now) + " of " +
+                                   std::to_string(model().crossings.size()) +
+                                   " crossings in one step (yarns slid more than one node; solver.max_search_lost = " +
+                                   fmt("%.3g", scene.solver.max_search_lost) + ")");
+        return false;
+      }
     }
     if (n % 16 == 0 || solver->time() >= model().end_time) {
       if (perforation_confirmed()) {
@@ -176,8 +202,14 @@ struct Simulation::Impl {
         return false;
       }
       const Vec3d xp = solver->projectile_position();
-      if (!std::isfinite(xp.norm()) || xp.norm() > 10 * (model().half_width + model().half_length) + 1) {
-        finish(RunStatus::diverged, EndReason::diverged, "the projectile left the domain without perforating");
+      if (!std::isfinite(xp.norm())) {
+        diverge("non_finite", "the projectile's position became NaN/infinite");
+        return false;
+      }
+      if (xp.norm() > 10 * (model().half_width + model().half_length) + 1) {
+        diverge("projectile_left_domain",
+                std::string("the projectile left the domain (more than 10 fabric sizes from the centre) without ") +
+                    (solver->had_contact() ? "perforating" : "touching the fabric: it crossed the fabric within one time step"));
         return false;
       }
     }
@@ -187,6 +219,16 @@ struct Simulation::Impl {
       return false;
     }
     return true;
+  }
+
+  // A fault found here rather than in the solver: same wording as the solver's.
+  void diverge(const std::string& cause, const std::string& why) {
+    fault_cause = cause;
+    fault_step = solver->steps();
+    fault_time = solver->time();
+    finish(RunStatus::diverged, EndReason::diverged,
+           "diverged at step " + std::to_string(fault_step) + " (t = " + fmt("%.4g", fault_time * 1e6) + " us): " + why +
+               ". " + advice());
   }
 
   std::string advice() const {
@@ -252,6 +294,9 @@ Summary Simulation::summary() const {
   s.status = I.status;
   s.end_reason = I.reason;
   s.diagnosis = I.diagnosis;
+  s.divergence_cause = I.fault_cause;
+  s.divergence_step = I.fault_step;
+  s.divergence_time_s = I.fault_time;
   s.perforated = I.reason == EndReason::perforated;
   s.impact_velocity_mps = m.impact_velocity;
   const double vf = I.forward_velocity();

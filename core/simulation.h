@@ -43,6 +43,11 @@ struct Summary {
   RunStatus status = RunStatus::running;
   EndReason end_reason = EndReason::none;
   std::string diagnosis;               // why it diverged / was interrupted, in words
+  // A diverged run: what stopped it (non_finite, energy_balance, node_escaped,
+  // projectile_left_domain, search_lost), the step it happened in and the simulated time.
+  std::string divergence_cause;
+  long divergence_step = -1;
+  double divergence_time_s = -1;
   bool perforated = false;
   double impact_velocity_mps = 0;
   double residual_velocity_mps = 0;    // speed along the flight path at the end (perforation: exit speed)

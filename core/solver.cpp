@@ -328,12 +328,12 @@ class SolverT final : public Solver {
     const double e0 = 0.5 * model_.projectile_mass * model_.impact_velocity * model_.impact_velocity;
     const double total = l.total();
     if (!std::isfinite(total)) {
-      fail("the energy ledger became NaN/infinite (a node or element went non-finite)");
+      fail("non_finite", "the energy ledger became NaN/infinite (a node or element went non-finite)");
     } else if (e0 > 0 && std::abs(total - e0) > e0 * max_balance_error_) {
       // Every ledger term is computed from its own mechanism, so a ledger that no longer
       // adds up to the initial energy means the integration has gone wrong (typically
       // unstable modes feeding energy in, which tension-only yarns then shed by breaking).
-      fail("the energy ledger is off by " + fmt(100 * (total - e0) / e0) + " % of the impact energy (energy " +
+      fail("energy_balance", "the energy ledger is off by " + fmt(100 * (total - e0) / e0) + " % of the impact energy (energy " +
            (total > e0 ? "created" : "lost") + " without a mechanism): the explicit integration is unstable");
     }
   }
@@ -374,8 +374,10 @@ class SolverT final : public Solver {
       x_[i] += dt * dv;
     }
     xp_ += dt * vp_;
-    if (!(maxr2 < escape_radius2_))
-      fail("a yarn node escaped the domain (more than 10 fabric sizes from the centre) or became NaN");
+    if (!std::isfinite(maxr2))
+      fail("non_finite", "a yarn node position became NaN/infinite");
+    else if (!(maxr2 < escape_radius2_))
+      fail("node_escaped", "a yarn node escaped the domain (more than 10 fabric sizes from the centre)");
   }
 
   // ------------------------------------------------------------ yarn contact (Eq 5-17)
@@ -1009,9 +1011,12 @@ class SolverT final : public Solver {
     ++steps_;
   }
 
-  void fail(const std::string& why) {
-    if (divergence_.empty())
-      divergence_ = "diverged at step " + std::to_string(steps_) + " (t = " + fmt(time_ * 1e6) + " us): " + why;
+  void fail(const char* cause, const std::string& why) {
+    if (!divergence_.empty()) return;
+    divergence_ = "diverged at step " + std::to_string(steps_) + " (t = " + fmt(time_ * 1e6) + " us): " + why;
+    divergence_cause_ = cause;
+    divergence_step_ = steps_;
+    divergence_time_ = time_;
   }
   static std::string fmt(double v) {
     char b[64];

@@ -61,6 +61,11 @@ class Solver {
   const ContactDiagnostics& diagnostics() const { return diag_; }
   bool diverged() const { return !divergence_.empty(); }
   const std::string& divergence() const { return divergence_; }
+  // The fault that stopped the run: cause ("non_finite", "energy_balance", "node_escaped"),
+  // the step it happened in (steps completed before it) and the time then.
+  const std::string& divergence_cause() const { return divergence_cause_; }
+  long divergence_step() const { return divergence_step_; }
+  double divergence_time() const { return divergence_time_; }
 
   // Projectile state (modelled part; mass is projectile_mass).
   virtual Vec3d projectile_position() const = 0;
@@ -114,7 +119,9 @@ class Solver {
   long steps_ = 0;
   Ledger ledger_;
   ContactDiagnostics diag_;
-  std::string divergence_;
+  std::string divergence_, divergence_cause_;
+  long divergence_step_ = -1;
+  double divergence_time_ = -1;
   int nodes_on_projectile_ = 0;
   double projectile_force_ = 0, yarn_force_ = 0, max_strain_ = 0;
   int sliding_count_ = 0, stuck_count_ = 0;

@@ -49,7 +49,8 @@ expect_exit 2 "projectile.mass_g: must be positive" -- "$ravel" run --set projec
 expect_exit 2 "yarn.friction: is NaN" -- "$ravel" run --set yarn.friction=NaN --out "$tmp/nan"
 printf '[projectile]\nmass_g = "heavy"\n' > "$tmp/type.toml"
 expect_exit 2 "wrong type" -- "$ravel" run "$tmp/type.toml" --out "$tmp/type"
-expect_exit 2 "does not fit inside the fabric" -- "$ravel" run --set projectile.diameter_mm=500 --out "$tmp/geo"
+expect_exit 2 "projectile.diameter_mm: the projectile (500 mm) is larger than the fabric (120 x 120 mm)" -- "$ravel" run --set projectile.diameter_mm=500 --out "$tmp/geo"
+expect_exit 2 "projectile.offset_y_mm: the projectile does not fit inside the fabric at the strike point" -- "$ravel" run --set projectile.offset_y_mm=-58 --out "$tmp/geo"
 expect_exit 2 "cannot open scene file" -- "$ravel" run "$tmp/missing.toml" --out "$tmp/missing"
 expect_exit 2 "unknown option --fast" -- "$ravel" run --fast --out "$tmp/x"
 expect_exit 2 "run needs --out" -- "$ravel" run

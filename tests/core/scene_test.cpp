@@ -91,7 +91,8 @@ TEST(Scene, NegativeZeroNanInfinite) {
 }
 
 TEST(Scene, ImpossibleGeometry) {
-  EXPECT_HAS(error_of("", {"projectile.diameter_mm=200"}), "does not fit inside the fabric");
+  EXPECT_HAS(error_of("", {"projectile.diameter_mm=200"}), "larger than the fabric");
+  EXPECT_HAS(error_of("", {"projectile.offset_x_mm=57"}), "does not fit inside the fabric at the strike point");
   EXPECT_HAS(error_of("", {"fabric.crossing_gap_mm=2"}), "fabric.crossing_gap_mm");
   EXPECT_HAS(error_of("", {"fabric.width_mm=1"}), "at least two yarn spacings");
   EXPECT_HAS(error_of("", {"fabric.node_mass_g=1"}), "inconsistent with density x area");
