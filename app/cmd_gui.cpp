@@ -293,6 +293,8 @@ class ViewCache {
     o.render_scale = hq ? 1.0f : app.playing_render_scale;
     // Close-ups use real tubes when still; while busy ribbons are always good enough.
     if (!hq && o.yarn_geometry == render::YarnGeometry::automatic) o.yarn_geometry = render::YarnGeometry::ribbons;
+    // ...and consecutive elements merge where the result is within half a pixel.
+    if (!hq) o.merge_px = 0.5f;
     const auto t0 = Clock::now();
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
     renderer.draw(app.view.frame, app.camera, o, 0, 0, w_, h_);

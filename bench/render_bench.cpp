@@ -1,7 +1,8 @@
 // render_bench: time to draw one frame of a default-scene-sized fabric under OSMesa.
 //
 //   render_bench [--size WxH] [--repeat N] [--sides N] [--samples N] [--view NAME]
-//                [--geometry auto|tubes|ribbons] [--scale F] [--zoom F] [--png PATH] [--sweep]
+//                [--geometry auto|tubes|ribbons] [--scale F] [--merge PX] [--zoom F]
+//                [--png PATH] [--sweep]
 //
 // Prints CSV (header + one row): width,height,elements,tubes,samples,sides,view,geometry,
 // scale,yarn_px,ms_per_frame,ms_first_frame,ms_png. ms_per_frame is the median of N draws
@@ -31,7 +32,7 @@ int usage(const char* why) {
   std::fprintf(stderr,
                "render_bench: %s\nusage: render_bench [--size WxH] [--repeat N] [--sides N] "
                "[--samples N] [--view oblique|top|back|section] [--geometry auto|tubes|ribbons] "
-               "[--scale F] [--zoom F] [--png PATH] [--sweep]\n",
+               "[--scale F] [--merge PX] [--zoom F] [--png PATH] [--sweep]\n",
                why);
   return 2;
 }
@@ -69,6 +70,8 @@ int main(int argc, char** argv) {
         return usage("--geometry wants auto, tubes or ribbons");
     } else if (a == "--scale") {
       options.render_scale = static_cast<float>(std::atof(v));
+    } else if (a == "--merge") {
+      options.merge_px = static_cast<float>(std::atof(v));
     } else if (a == "--zoom") {
       zoom = static_cast<float>(std::atof(v));
     } else if (a == "--png") {
@@ -99,12 +102,14 @@ int main(int argc, char** argv) {
       int w, h, samples, sides;
       G geometry;
       float scale;
+      float merge = 0;
     } matrix[] = {
         {1600, 1200, 4, 8, G::tubes, 1},   {1600, 1200, 4, 8, G::ribbons, 1},
         {1600, 1200, 0, 8, G::tubes, 1},   {1600, 1200, 0, 4, G::tubes, 1},
         {1600, 1200, 0, 8, G::ribbons, 1}, {1200, 640, 0, 8, G::tubes, 1},
         {1200, 640, 0, 4, G::tubes, 1},    {1200, 640, 0, 8, G::ribbons, 1},
         {1200, 640, 0, 8, G::ribbons, 0.75f}, {1200, 640, 0, 8, G::ribbons, 0.5f},
+        {1200, 640, 0, 8, G::ribbons, 1, 0.5f}, {1600, 1200, 0, 8, G::ribbons, 0.5f},
         {160, 120, 0, 8, G::tubes, 1},     {160, 120, 0, 8, G::ribbons, 1},
     };
     for (const auto& m : matrix) {
@@ -112,13 +117,14 @@ int main(int argc, char** argv) {
       o.tube_sides = m.sides;
       o.yarn_geometry = m.geometry;
       o.render_scale = m.scale;
+      o.merge_px = m.merge;
       configs.push_back({m.w, m.h, m.samples, o});
     }
   }
 
   std::printf(
-      "width,height,elements,tubes,samples,sides,view,geometry,scale,yarn_px,ms_per_frame,"
-      "ms_first_frame,ms_png\n");
+      "width,height,elements,tubes,samples,sides,view,geometry,scale,merge_px,yarn_px,"
+      "ms_per_frame,ms_first_frame,ms_png\n");
   for (const Config& c : configs) {
     std::string error;
     auto context = render::OffscreenContext::create(c.width, c.height, c.samples, &error);
@@ -151,10 +157,10 @@ int main(int argc, char** argv) {
       png_ms = ms_since(t0);
     }
     const render::DrawStats& st = renderer.stats();
-    std::printf("%d,%d,%zu,%d,%d,%d,%s,%s,%.2f,%.1f,%.1f,%.1f,%.1f\n", c.width, c.height,
+    std::printf("%d,%d,%zu,%d,%d,%d,%s,%s,%.2f,%.2f,%.1f,%.1f,%.1f,%.1f\n", c.width, c.height,
                 frame.elem_a.size(), st.tubes_drawn, c.samples, c.options.tube_sides,
                 render::to_string(c.options.view), st.ribbons ? "ribbons" : "tubes",
-                static_cast<double>(st.fabric_width) / c.width, st.yarn_width_px,
+                static_cast<double>(st.fabric_width) / c.width, c.options.merge_px, st.yarn_width_px,
                 times[times.size() / 2], first, png_ms);
     std::fflush(stdout);
   }

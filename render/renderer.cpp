@@ -298,6 +298,8 @@ struct Renderer::Impl {
   Mesh sphere, cylinder, cone, box;
   std::vector<TubeInstance> instances;
   std::vector<TubeInstance> uploaded;  // what inst_vbo holds
+  std::vector<std::int32_t> next_elem;  // level of detail: element leaving each node
+  std::vector<std::uint8_t> merged;     // element already drawn by a merged instance
   // Low-resolution target for ViewOptions::render_scale < 1: colour + depth textures.
   GLuint low_fbo = 0, low_color = 0, low_depth = 0;
   int low_w = 0, low_h = 0;
@@ -598,18 +600,64 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       if (frame.elem_a[e] < r.intact.size()) r.intact[frame.elem_a[e]] = 1;
       if (frame.elem_b[e] < r.intact.size()) r.intact[frame.elem_b[e]] = 1;
     }
+    // Yarn width on screen at the camera target decides ribbons or tubes.
+    const float view_h_m =
+        2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180.0f);
+    const float px_per_m = view_h_m > 0 ? h / view_h_m : 0.0f;
+    r.stats.yarn_width_px = width * px_per_m;
+    const bool ribbons =
+        o.yarn_geometry == YarnGeometry::ribbons ||
+        (o.yarn_geometry == YarnGeometry::automatic && r.stats.yarn_width_px < o.tube_min_px);
+    r.stats.ribbons = ribbons;
+    // Level of detail (ribbons only): two consecutive intact elements of a yarn become one
+    // when their shared node lies within merge_px of the merged segment on screen and
+    // their colours match.
+    const float merge_tol_m = ribbons && o.merge_px > 0 && px_per_m > 0 ? o.merge_px / px_per_m : 0.0f;
+    auto t_of = [&](std::size_t e) {
+      const float value = element_value(frame, o.field, e) * strain_scale;
+      return std::clamp((value - lo) * inv_range, 0.0f, 1.0f);
+    };
+    auto intact_elem = [&](std::size_t e) {
+      return e < n_elem && !(e < frame.elem_broken.size() && frame.elem_broken[e]) &&
+             frame.elem_a[e] < frame.node_pos.size() && frame.elem_b[e] < frame.node_pos.size();
+    };
+
+    // The element leaving each node along its yarn (each node is on one yarn), and which
+    // elements a merge already drew.
+    if (merge_tol_m > 0) {
+      r.next_elem.assign(frame.node_pos.size(), -1);
+      for (std::size_t e = 0; e < n_elem; ++e)
+        if (frame.elem_a[e] < r.next_elem.size()) r.next_elem[frame.elem_a[e]] = static_cast<std::int32_t>(e);
+      r.merged.assign(n_elem, 0);
+    }
     r.instances.clear();
     r.instances.reserve(n_elem + 64);
     for (std::size_t e = 0; e < n_elem; ++e) {
+      if (merge_tol_m > 0 && r.merged[e]) continue;
       const std::uint32_t ia = frame.elem_a[e], ib = frame.elem_b[e];
       if (ia >= frame.node_pos.size() || ib >= frame.node_pos.size()) continue;
       const auto& a = frame.node_pos[ia];
       const auto& b = frame.node_pos[ib];
-      const float value = element_value(frame, o.field, e) * strain_scale;
-      const float t = std::clamp((value - lo) * inv_range, 0.0f, 1.0f);
+      const float t = t_of(e);
       const bool broken = e < frame.elem_broken.size() && frame.elem_broken[e];
       const float kind = e < frame.elem_family.size() && frame.elem_family[e] ? 1.0f : 0.0f;
       if (!broken) {
+        const std::size_t n =
+            merge_tol_m > 0 && r.next_elem[ib] >= 0 ? static_cast<std::size_t>(r.next_elem[ib]) : n_elem;
+        if (n > e && intact_elem(n) &&
+            (frame.elem_yarn.size() <= n || frame.elem_yarn[n] == frame.elem_yarn[e])) {
+          const float tn = t_of(n);
+          const auto& c = frame.node_pos[frame.elem_b[n]];
+          const Vec3 pa{a[0], a[1], a[2]}, pb{b[0], b[1], b[2]}, pc{c[0], c[1], c[2]};
+          const Vec3 chord = pc - pa;
+          const float l2 = dot(chord, chord);
+          const float u = l2 > 0 ? std::clamp(dot(pb - pa, chord) / l2, 0.0f, 1.0f) : 0.0f;
+          if (std::abs(tn - t) < 0.02f && length(pb - (pa + chord * u)) < merge_tol_m) {
+            r.instances.push_back({a[0], a[1], a[2], 0.5f * (t + tn), c[0], c[1], c[2], kind});
+            r.merged[n] = 1;  // drawn by this instance
+            continue;
+          }
+        }
         r.instances.push_back({a[0], a[1], a[2], t, b[0], b[1], b[2], kind});
         continue;
       }
@@ -644,14 +692,6 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       r.stats.instances_uploaded = true;
     }
 
-    // Yarn width on screen at the camera target decides ribbons or tubes.
-    const float view_h_m =
-        2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180.0f);
-    r.stats.yarn_width_px = view_h_m > 0 ? width / view_h_m * h : 0.0f;
-    const bool ribbons =
-        o.yarn_geometry == YarnGeometry::ribbons ||
-        (o.yarn_geometry == YarnGeometry::automatic && r.stats.yarn_width_px < o.tube_min_px);
-    r.stats.ribbons = ribbons;
     const GLuint prog = ribbons ? r.ribbon_prog : r.tube_prog;
 
     glUseProgram(prog);

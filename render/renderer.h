@@ -131,6 +131,10 @@ struct ViewOptions {
   int tube_sides = 8;  // 4..16
   YarnGeometry yarn_geometry = YarnGeometry::automatic;
   float tube_min_px = 16.0f;  // automatic: tubes when the yarn is at least this wide on screen
+  // Level of detail for ribbons: merge two consecutive elements of a yarn into one when
+  // their shared node is within this many pixels of the merged segment and their colours
+  // match (0 = off, the default: every element is drawn). For interactive views in motion.
+  float merge_px = 0.0f;
 
   // Draw the background and the fabric at this fraction of the viewport's resolution and
   // upscale them (0.25..1; 1 = off). The projectile, the clamps and the overlay are still
@@ -146,7 +150,7 @@ struct ViewOptions {
 
 // Numbers the renderer derived for the last frame (for tests, the app and the bench).
 struct DrawStats {
-  int tubes_drawn = 0;      // tube instances including mirrored copies and stubs
+  int tubes_drawn = 0;      // tube / ribbon instances including mirrored copies and stubs
   int broken_elements = 0;  // in the modelled part
   int mirror_copies = 1;    // 1, 2 or 4
   float yarn_width_m = 0, yarn_thickness_m = 0;

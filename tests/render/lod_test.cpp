@@ -71,6 +71,36 @@ TEST(RenderLod, AutomaticUsesRibbonsFarAndTubesClose) {
   EXPECT_GE(headless().stats().yarn_width_px, o.tube_min_px);
 }
 
+// Merging consecutive elements (level of detail) halves the instances of a small view
+// without changing the outline; off by default, and never for a close-up.
+TEST(RenderLod, MergedElementsKeepTheOutline) {
+  SyntheticFabric s;
+  s.yarns = 40;
+  s.dent_depth_m = 0.008f;
+  s.projectile_z_m = 0.05f;
+  const Frame f = make_synthetic_frame(s);
+  const int w = 240, h = 180;
+  ViewOptions o = fabric_only(ViewPreset::oblique);
+  o.yarn_geometry = YarnGeometry::ribbons;
+  const Camera c = render::fitted_camera(f, o.view, float(w) / h);
+  const Image bg = render_image(f, c, background_only(o), w, h);
+  const auto all = fabric_mask(render_image(f, c, o, w, h), bg);
+  const int all_tubes = headless().stats().tubes_drawn;
+  o.merge_px = 0.5f;
+  const auto merged = fabric_mask(render_image(f, c, o, w, h), bg);
+  EXPECT_LT(headless().stats().tubes_drawn, 0.7 * all_tubes);
+  int covered = 0, differ = 0;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    covered += all[i];
+    differ += all[i] != merged[i];
+  }
+  EXPECT_LT(double(differ) / covered, 0.02);
+  Camera close = c;
+  close.zoom(0.1f);
+  render_image(f, close, o, w, h);
+  EXPECT_EQ(headless().stats().tubes_drawn, all_tubes);
+}
+
 // A second draw of the same frame does not upload the instances again.
 TEST(RenderLod, UnchangedInstancesAreNotUploadedAgain) {
   SyntheticFabric s;
