@@ -53,12 +53,33 @@ std::string tick_label(double v, double step) {
   return buf;
 }
 
+namespace {
+// A value that can be drawn on the axis (finite; positive on a log axis).
+bool drawable(const Axis& a, double v) { return std::isfinite(v) && (!a.log || v > 0); }
+}  // namespace
+
 int finite_point_count(const Chart& chart) {
   int n = 0;
+  for (int c : chart.grid.cells)
+    if (c >= 0) ++n;
   for (const auto& s : chart.series)
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
-      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) ++n;
+      if (drawable(chart.x, s.x[i]) && drawable(chart.y, s.y[i])) ++n;
   return n;
+}
+
+std::vector<double> log_ticks(double lo, double hi) {
+  std::vector<double> t;
+  if (!(lo > 0) || !(hi > lo) || !std::isfinite(hi)) return {lo};
+  const int d0 = int(std::floor(std::log10(lo) + 1e-9)), d1 = int(std::ceil(std::log10(hi) - 1e-9));
+  const bool fine = d1 - d0 <= 2;
+  for (int d = d0; d <= d1; ++d)
+    for (double m : {1.0, 2.0, 5.0}) {
+      if (m != 1.0 && !fine) continue;
+      const double v = m * std::pow(10.0, d);
+      if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) t.push_back(v);
+    }
+  return t;
 }
 
 namespace {
@@ -67,6 +88,13 @@ void axis_range(const Axis& a, double dlo, double dhi, double* lo, double* hi) {
   if (a.fixed_range) {
     *lo = a.min;
     *hi = a.max;
+    return;
+  }
+  if (a.log) {  // whole decades around the positive data
+    if (!(dlo > 0) || !std::isfinite(dhi)) dlo = 1, dhi = 10;
+    *lo = std::pow(10.0, std::floor(std::log10(dlo) + 1e-9));
+    *hi = std::pow(10.0, std::ceil(std::log10(dhi) - 1e-9));
+    if (*hi <= *lo) *hi = *lo * 10;
     return;
   }
   if (a.include_zero) {
@@ -99,7 +127,7 @@ void chart_ranges(const Chart& chart, double* x0, double* x1, double* y0, double
   double xl = INFINITY, xh = -INFINITY, yl = INFINITY, yh = -INFINITY;
   for (const auto& s : chart.series)
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      if (!drawable(chart.x, s.x[i]) || !drawable(chart.y, s.y[i])) continue;
       xl = std::min(xl, s.x[i]);
       xh = std::max(xh, s.x[i]);
       yl = std::min(yl, s.y[i]);
@@ -142,19 +170,82 @@ void Painter::rect_outline(double x0, double y0, double x1, double y1, Rgb c, do
   line(x0, y1, x0, y0, c, w, false);
 }
 
+namespace {
+
+// A categorical grid chart (Chart::grid): cells, row and column labels, a legend of the
+// categories. Same fonts and margins as the x-y charts.
+void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double W, double H, double fs) {
+  const Rgb ink{30, 30, 30}, frame{90, 90, 90}, white{255, 255, 255};
+  const Grid& g = chart.grid;
+  const size_t nx = g.x_labels.size(), ny = g.y_labels.size();
+  if (nx == 0 || ny == 0 || g.cells.size() != nx * ny) return;
+  double ylab_w = 0;
+  for (const auto& l : g.y_labels) ylab_w = std::max(ylab_w, p.text_width(l, fs));
+  double legend_w = 0;
+  if (chart.legend)
+    for (const auto& c : g.categories) legend_w = std::max(legend_w, p.text_width(c, fs) + 2.6 * fs);
+  legend_w = std::min(legend_w, 0.35 * W);
+  const double top = Y + (chart.subtitle.empty() ? 2.6 : 3.9) * fs;
+  const double left = X + ylab_w + 2.6 * fs;
+  const double right = X + W - (legend_w > 0 ? legend_w + 1.2 * fs : 1.2 * fs);
+  const double bottom = Y + H - 3.4 * fs;
+  if (right - left < 20 || bottom - top < 20) return;
+  p.text(X + W / 2, Y + 1.2 * fs, chart.title, 1.2 * fs, ink, 1, false);
+  if (!chart.subtitle.empty()) p.text(X + W / 2, Y + 2.6 * fs, chart.subtitle, 0.85 * fs, {90, 90, 90}, 1, false);
+  const double cw = (right - left) / double(nx), ch = (bottom - top) / double(ny);
+  const double gap = std::max(1.0, std::min(cw, ch) * 0.04);
+  for (size_t yi = 0; yi < ny; ++yi)
+    for (size_t xi = 0; xi < nx; ++xi) {
+      const double cx0 = left + xi * cw, cy1 = bottom - yi * ch;
+      const int k = g.cell(xi, yi);
+      const Rgb c = k >= 0 && size_t(k) < g.colors.size() ? g.colors[size_t(k)] : Rgb{240, 240, 240};
+      p.rect_filled(cx0 + gap, cy1 - ch + gap, cx0 + cw - gap, cy1 - gap, c);
+      const size_t i = yi * nx + xi;
+      if (i < g.cell_text.size() && !g.cell_text[i].empty()) {
+        const double lum = 0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2];
+        const double ts = std::min(fs, 0.9 * (cw - 2 * gap) / std::max(1.0, p.text_width(g.cell_text[i], 1.0)));
+        p.text(cx0 + cw / 2, cy1 - ch / 2, g.cell_text[i], std::max(6.0, ts), lum < 140 ? white : ink, 1, false);
+      }
+    }
+  for (size_t xi = 0; xi < nx; ++xi) p.text(left + (xi + 0.5) * cw, bottom + 1.1 * fs, g.x_labels[xi], fs, ink, 1, false);
+  for (size_t yi = 0; yi < ny; ++yi) p.text(left - 0.7 * fs, bottom - (yi + 0.5) * ch, g.y_labels[yi], fs, ink, 2, false);
+  p.text((left + right) / 2, bottom + 2.5 * fs, chart.x.title(), fs, ink, 1, false);
+  p.text(X + 0.9 * fs, (top + bottom) / 2, chart.y.title(), fs, ink, 1, true);
+  p.rect_outline(left, top, right, bottom, frame, 1);
+  if (legend_w > 0) {
+    double ly = top + 0.8 * fs;
+    const double lx = right + 1.0 * fs;
+    for (size_t k = 0; k < g.categories.size(); ++k) {
+      const Rgb c = k < g.colors.size() ? g.colors[k] : Rgb{240, 240, 240};
+      p.rect_filled(lx, ly - 0.5 * fs, lx + fs, ly + 0.5 * fs, c);
+      p.text(lx + 1.6 * fs, ly, g.categories[k], fs, ink, 0, false);
+      ly += 1.5 * fs;
+    }
+  }
+}
+
+}  // namespace
+
 void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, double H) {
   const Rgb ink{30, 30, 30}, grid{225, 225, 225}, frame{90, 90, 90}, white{255, 255, 255};
   const double fs = std::clamp(H / 40.0, 9.0, 18.0);  // base font size
   p.rect_filled(X, Y, X + W, Y + H, white);
+  if (!chart.grid.empty()) {
+    draw_grid_chart(chart, p, X, Y, W, H, fs);
+    return;
+  }
 
   double x0, x1, y0, y1;
   chart_ranges(chart, &x0, &x1, &y0, &y1);
-  const auto xt = nice_ticks(x0, x1, 6);  // the target chart_ranges() padded to
-  const auto yt = nice_ticks(y0, y1, 6);
+  // Linear axes: the target chart_ranges() padded to; log axes: decades.
+  const auto xt = chart.x.log ? log_ticks(x0, x1) : nice_ticks(x0, x1, 6);
+  const auto yt = chart.y.log ? log_ticks(y0, y1) : nice_ticks(y0, y1, 6);
   const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1, ystep = yt.size() > 1 ? yt[1] - yt[0] : 1;
+  auto xlabel = [&](double v) { return chart.x.log ? tick_label(v, v) : tick_label(v, xstep); };
+  auto ylabel = [&](double v) { return chart.y.log ? tick_label(v, v) : tick_label(v, ystep); };
 
   double ylab_w = 0;
-  for (double v : yt) ylab_w = std::max(ylab_w, p.text_width(tick_label(v, ystep), fs));
+  for (double v : yt) ylab_w = std::max(ylab_w, p.text_width(ylabel(v), fs));
   double legend_w = 0;
   if (chart.legend && chart.series.size() > 1)
     for (const auto& s : chart.series) legend_w = std::max(legend_w, p.text_width(s.name, fs) + 3.2 * fs);
@@ -165,21 +256,31 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
   const double right = X + W - (legend_w > 0 ? legend_w + 1.2 * fs : 1.2 * fs);
   const double bottom = Y + H - 3.4 * fs;
   if (right - left < 20 || bottom - top < 20) return;
-  auto px = [&](double v) { return left + (v - x0) / (x1 - x0) * (right - left); };
-  auto py = [&](double v) { return bottom - (v - y0) / (y1 - y0) * (bottom - top); };
+  auto tx = [&](double v) { return chart.x.log ? std::log10(v) : v; };
+  auto ty = [&](double v) { return chart.y.log ? std::log10(v) : v; };
+  auto px = [&](double v) { return left + (tx(v) - tx(x0)) / (tx(x1) - tx(x0)) * (right - left); };
+  auto py = [&](double v) { return bottom - (ty(v) - ty(y0)) / (ty(y1) - ty(y0)) * (bottom - top); };
 
   p.text(X + W / 2, Y + 1.2 * fs, chart.title, 1.2 * fs, ink, 1, false);
   if (!chart.subtitle.empty()) p.text(X + W / 2, Y + 2.6 * fs, chart.subtitle, 0.85 * fs, {90, 90, 90}, 1, false);
 
+  // Log axes: faint minor lines at 2..9 x each decade.
+  const Rgb minor_grid{242, 242, 242};
+  if (chart.x.log)
+    for (double d = x0; d < x1 * (1 - 1e-9); d *= 10)
+      for (int m = 2; m <= 9; ++m) p.line(px(m * d), top, px(m * d), bottom, minor_grid, 1, false);
+  if (chart.y.log)
+    for (double d = y0; d < y1 * (1 - 1e-9); d *= 10)
+      for (int m = 2; m <= 9; ++m) p.line(left, py(m * d), right, py(m * d), minor_grid, 1, false);
   for (double v : xt) {
     p.line(px(v), top, px(v), bottom, grid, 1, false);
     p.line(px(v), bottom, px(v), bottom + 0.4 * fs, frame, 1, false);
-    p.text(px(v), bottom + 1.1 * fs, tick_label(v, xstep), fs, ink, 1, false);
+    p.text(px(v), bottom + 1.1 * fs, xlabel(v), fs, ink, 1, false);
   }
   for (double v : yt) {
     p.line(left, py(v), right, py(v), grid, 1, false);
     p.line(left - 0.4 * fs, py(v), left, py(v), frame, 1, false);
-    p.text(left - 0.7 * fs, py(v), tick_label(v, ystep), fs, ink, 2, false);
+    p.text(left - 0.7 * fs, py(v), ylabel(v), fs, ink, 2, false);
   }
   p.text((left + right) / 2, bottom + 2.5 * fs, chart.x.title(), fs, ink, 1, false);
   p.text(X + 0.9 * fs, (top + bottom) / 2, chart.y.title(), fs, ink, 1, true);
@@ -195,7 +296,7 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
       run.clear();
     };
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+      if (!drawable(chart.x, s.x[i]) || !drawable(chart.y, s.y[i])) {
         flush();
         continue;
       }
@@ -440,6 +541,20 @@ std::string chart_csv(const Chart& chart) {
     for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
     return o + "\"";
   };
+  if (!chart.grid.empty()) {
+    const Grid& g = chart.grid;
+    std::string out = quote(chart.x.title()) + "," + quote(chart.y.title()) + ",category,text\n";
+    for (size_t yi = 0; yi < g.y_labels.size(); ++yi)
+      for (size_t xi = 0; xi < g.x_labels.size(); ++xi) {
+        const size_t i = yi * g.x_labels.size() + xi;
+        if (i >= g.cells.size()) break;
+        const int k = g.cells[i];
+        out += quote(g.x_labels[xi]) + "," + quote(g.y_labels[yi]) + "," +
+               (k >= 0 && size_t(k) < g.categories.size() ? quote(g.categories[size_t(k)]) : std::string()) + "," +
+               (i < g.cell_text.size() ? quote(g.cell_text[i]) : std::string()) + "\n";
+      }
+    return out;
+  }
   std::string out = "series," + quote(chart.x.title()) + "," + quote(chart.y.title()) + "\n";
   char buf[64];
   for (const auto& s : chart.series)

@@ -30,7 +30,22 @@ struct Axis {
   bool fixed_range = false;         // false: from the data, padded to nice ticks
   double min = 0, max = 1;
   bool include_zero = false;        // extend the data range to 0
+  bool log = false;                 // log10 scale: decade ticks; values <= 0 are skipped (a gap)
   std::string title() const { return unit.empty() ? label : label + " (" + unit + ")"; }
+};
+
+// A categorical grid ("heat map" of categories, e.g. a stability map): one coloured cell
+// per (x, y) label pair. A chart with a grid draws it instead of its series; the axes give
+// only the titles.
+struct Grid {
+  std::vector<std::string> x_labels;    // columns, left to right
+  std::vector<std::string> y_labels;    // rows, bottom to top
+  std::vector<std::string> categories;  // legend entries
+  std::vector<Rgb> colors;              // one per category
+  std::vector<int> cells;               // category per cell, row-major from the bottom row; -1 = no data
+  std::vector<std::string> cell_text;   // optional short text per cell (same layout)
+  bool empty() const { return cells.empty(); }
+  int cell(size_t xi, size_t yi) const { return cells[yi * x_labels.size() + xi]; }
 };
 
 struct Chart {
@@ -39,6 +54,7 @@ struct Chart {
   Axis x, y;
   std::vector<Series> series;
   bool legend = true;
+  Grid grid;                        // non-empty: a categorical grid chart
 };
 
 // Palette shared by every backend (colour-blind safe, Okabe-Ito order).
@@ -50,7 +66,10 @@ std::vector<double> nice_ticks(double lo, double hi, int target = 6);
 std::string tick_label(double v, double step);
 // The ranges a chart is drawn with (data extremes widened to nice ticks, or fixed).
 void chart_ranges(const Chart& chart, double* x0, double* x1, double* y0, double* y1);
-// Points of the chart that actually have data (every series, finite x and y).
+// Ticks of a log axis over [lo, hi] (decades; 2 and 5 between them over few decades).
+std::vector<double> log_ticks(double lo, double hi);
+// Points of the chart that actually have data (every series, finite x and y; on log axes
+// positive; the cells with data of a grid chart).
 int finite_point_count(const Chart& chart);
 
 // What any backend can draw. Coordinates in pixels, y down, origin top left.
@@ -81,7 +100,8 @@ std::string chart_svg(const Chart& chart, int width = 900, int height = 600);
 // RGB pixels, top row first.
 std::vector<unsigned char> chart_rgb(const Chart& chart, int width, int height);
 std::vector<unsigned char> png_bytes(const std::vector<unsigned char>& rgb, int width, int height);
-// Long format: series,<x title>,<y title>; one row per point.
+// Long format: series,<x title>,<y title>; one row per point. A grid chart:
+// <x title>,<y title>,category,text; one row per cell.
 std::string chart_csv(const Chart& chart);
 
 // Write STEM.csv, STEM.svg and STEM.png atomically. Throws ravel::OutputError.

@@ -639,8 +639,9 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
         d.ravel = "no ballistic limit found for the pin-jointed model: " +
                   (!e.error.empty() ? e.error : !e.result.warnings.empty() ? e.result.warnings.front() : "no bracket");
     if (pin_entry && std::isfinite(bl(0.2))) {
-      d.ravel = "pin-jointed " + num(pin_entry->result.ballistic_limit_mps, "%.1f") + " m/s vs " + num(bl(0.2), "%.1f") +
-                " m/s (mu 0.2)";
+      d.ravel = "pin-jointed " + num(pin_entry->result.ballistic_limit_mps, "%.1f") + " m/s (bracket " +
+                num(pin_entry->result.lo_mps, "%.1f") + "-" + num(pin_entry->result.hi_mps, "%.1f") +
+                (pin_entry->result.converged ? "" : ", not converged") + ") vs " + num(bl(0.2), "%.1f") + " m/s (mu 0.2)";
       d.verdict = pin_entry->result.ballistic_limit_mps < bl(0.2) - tol ? "agrees"
                   : pin_entry->result.ballistic_limit_mps < bl(0.2)     ? "partly"
                                                                          : "differs";
@@ -754,8 +755,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     md << "| [" << e.label << "](limit/" << lab << "/limit.json) | ";
     if (e.have && e.result.bracketed)
       md << num(e.result.ballistic_limit_mps, "%.1f") << " | " << num(e.result.lo_mps, "%.1f") << " - "
-         << num(e.result.hi_mps, "%.1f") << " | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f")
-         << " |\n";
+         << num(e.result.hi_mps, "%.1f") << (e.result.converged ? "" : " (not converged: see warnings)") << " | "
+         << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " |\n";
     else
       md << "not found: " << (!e.error.empty() ? e.error : !e.result.warnings.empty() ? e.result.warnings.front() : "")
          << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " |\n";

@@ -1,0 +1,135 @@
+// Speed against accuracy (SPEC §10, docs/tradeoff.md): run a scene once per setting of
+// each speed/accuracy knob (time-step factor, contact iterations, precision, contact
+// model, symmetry, yarns per element), measure its cost (wall time, CPU time, node-steps
+// per second) and its error against the finest setting (residual velocity, energy
+// absorbed, perforation time and, optionally, the ballistic limit), and say which
+// setting is the cheapest within 1 % and 5 %.
+//
+// The runs go through the sweep machinery (studies/sweep.h): one case folder per
+// distinct setting, written atomically, resumed on a rerun, --jobs in parallel. A case's
+// name lists every knob's value, so the same setting reached from two knobs (e.g. the
+// scene's own values) runs once.
+//
+// tradeoff.json keeps, per knob, the cheapest setting within each tolerance; `ravel run`
+// reads the one shipped for its scene (assets/tradeoff/<scene name>.json) and suggests a
+// cheaper setting when one is known to agree (tradeoff_suggestions()).
+#pragma once
+
+#include <atomic>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "chart.h"
+#include "limit.h"
+#include "scene.h"
+
+namespace ravel::studies {
+
+struct TradeoffKnob {
+  std::string key;                  // scene key, e.g. solver.dt_factor
+  std::vector<std::string> values;  // as for --set
+};
+
+// The knobs and their default lists (quick: shorter lists).
+std::vector<TradeoffKnob> default_tradeoff_knobs(bool quick = false);
+// The finest value of a knob (the reference's): smallest dt_factor, most iterations,
+// double, sliding, yarns_per_element 1, symmetry auto (the symmetric model is exact for a
+// symmetric scene; the `full` row checks that claim). Empty for an unknown key.
+std::string finest_knob_value(const TradeoffKnob& knob);
+// The value a scene has for a knob key, written as --set takes it ("0.5", "sliding").
+std::string scene_knob_value(const Scene& scene, const std::string& key);
+// Is `key` one of the knobs tradeoff knows?
+bool is_tradeoff_knob(const std::string& key);
+
+// The quantities compared with the reference.
+enum TradeoffQuantity { q_residual_velocity = 0, q_energy_absorbed = 1, q_perforation_time = 2, q_ballistic_limit = 3 };
+constexpr int kTradeoffQuantities = 4;
+const char* quantity_key(int q);    // residual_velocity | energy_absorbed | perforation_time | ballistic_limit
+const char* quantity_words(int q);  // "residual velocity", ...
+
+// Relative error |value - ref| / |ref|; when ref is 0, relative to `scale` (the impact
+// velocity for residual velocity). NaN when either is NaN.
+double relative_error(double value, double ref, double scale = 0);
+// Perforation time error: both absent (< 0): 0; only one: infinity; else relative.
+double perforation_time_error(double value_s, double ref_s);
+
+// Indices of the points no other point beats in both cost and error (lower is better;
+// ties kept once), sorted by cost. Points with a non-finite cost or error are left out.
+std::vector<size_t> pareto_front(const std::vector<double>& cost, const std::vector<double>& error);
+
+struct TradeoffRow {
+  std::string knob;                 // scene key, or "reference"
+  std::string value;                // the knob's value ("finest" for the reference)
+  std::string case_name;            // folder under DIR/cases
+  std::string status;               // completed | warned | diverged | failed | missing
+  std::string note;                 // diagnosis / warnings, in words
+  double wall_time_s = NAN, cpu_time_s = NAN, node_steps_per_s = NAN;
+  double value_q[kTradeoffQuantities] = {NAN, NAN, NAN, NAN};  // the quantities (m/s, J, s, m/s)
+  double error[kTradeoffQuantities] = {NAN, NAN, NAN, NAN};    // relative to the reference
+  bool perforated = false;
+  double cost_s = NAN;              // the chosen cost measure (TradeoffOptions::cost), s
+};
+
+struct TradeoffOptions {
+  std::string scene_path;           // resolved file
+  std::vector<std::string> overrides;
+  std::string out_dir;
+  std::vector<TradeoffKnob> knobs;  // default_tradeoff_knobs() unless set
+  bool around_reference = false;    // other knobs at their finest (true) or the scene's values
+  std::string cost = "wall";        // wall | cpu: the cost the verdict and charts use
+  int jobs = 1;
+  int solver_threads = 1;
+  bool limit = false;               // also the ballistic limit of every setting
+  LimitOptions limit_options;       // tolerance etc. (start: 100 m/s)
+  std::string date;                 // YYYY-MM-DD written into tradeoff.json ("" = today)
+  std::string note;                 // free text (machine load, quick mode) for tradeoff.json
+  std::function<void(const std::string& what)> on_progress;  // one line per finished run
+};
+
+struct TradeoffVerdictEntry {
+  bool found = false;
+  std::string knob, value;
+  double cost_s = NAN, error = NAN;
+};
+
+struct TradeoffResult {
+  std::vector<TradeoffRow> rows;    // rows[0] is the reference
+  std::string scene_name;
+  double impact_velocity_mps = 0;
+  double wall_time_s = 0;           // the whole study
+  int runs = 0, runs_skipped = 0;
+  bool interrupted = false;
+  std::vector<std::string> warnings;
+};
+
+// Run (or resume) every setting; writes DIR/cases/... and returns the rows. The caller
+// writes the outputs with the functions below (run_tradeoff does not).
+TradeoffResult run_tradeoff(const TradeoffOptions& opt, const std::atomic<bool>* interrupt = nullptr);
+
+// The cheapest row of `knob` ("" = any row) whose error in quantity q is within tol.
+TradeoffVerdictEntry cheapest_within(const TradeoffResult& r, const std::string& knob, int q, double tol);
+
+std::string tradeoff_csv(const TradeoffResult& r);
+std::string tradeoff_json(const TradeoffResult& r, const TradeoffOptions& opt);
+std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& opt);
+// Error (%) against cost (s), log-log, one series per knob, the Pareto front, 1 % / 5 %
+// lines: one chart per quantity (file stem first).
+std::vector<std::pair<std::string, Chart>> tradeoff_charts(const TradeoffResult& r, const TradeoffOptions& opt);
+
+// Suggestions for a run with `scene`, from a tradeoff.json text: for each knob, a
+// cheaper value (at least `min_ratio` x less cost than the scene's own value in the
+// same table) whose error is within `tolerance` for at least one quantity (the one with
+// most quantities, then the cheapest). Nothing when the file is for another scene, the
+// scene's value was not measured, or nothing cheaper qualifies.
+std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::string& tradeoff_json_text,
+                                              double tolerance = 0.01, double min_ratio = 1.2);
+// assets/tradeoff/<scene name>.json (empty when there is none).
+std::string shipped_tradeoff_path(const Scene& scene);
+// The suggestions from the shipped file for `scene` (none when there is no file).
+std::vector<std::string> shipped_tradeoff_suggestions(const Scene& scene);
+// Add "suggestions": [...] to a run's summary.json (rewritten atomically).
+void add_suggestions_to_summary(const std::string& summary_path, const std::vector<std::string>& suggestions);
+
+}  // namespace ravel::studies
