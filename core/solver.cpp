@@ -49,7 +49,7 @@ class SolverT final : public Solver {
     dv_pfriction_.assign(n, V3::Zero());
     dx_contact_.assign(n, V3::Zero());
     for (int i = 0; i < n; ++i) {
-      x_[i] = model_.x0[i].cast<Real>();
+      x_[i] = model_.x0[i].template cast<Real>();
       v_[i].setZero();
       f_[i].setZero();
     }
@@ -87,7 +87,7 @@ class SolverT final : public Solver {
       cr_kf_[c] = model_.crossings[c].weft_node;
     }
     xp_ = model_.projectile_x0.cast<Real>();
-    vp_ = (model_.impact_velocity * model_.flight_dir).cast<Real>();
+    vp_ = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
     set_threads(threads);
     // Initial ledger: all energy is the projectile's.
     ke_half_ = 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
@@ -231,13 +231,19 @@ class SolverT final : public Solver {
       strain_[e] = eps;
       diss += dd;
       if (breakable && double(eps) >= fail) {
-        // Failure: the element is removed for good, its energy is released (SPEC §1).
+        // Failure: the element is removed for good, its energy is released (SPEC §1). The
+        // kinetic energy the element took was the work of its forces up to its last half
+        // step (central differences apply f(t-dt) over [t-3dt/2, t-dt/2]), so what it
+        // held is booked at mid-step: the mean of its energy at t-dt and at t. Booking
+        // the energy at t instead created f v dt / 2 per break, 4 % of the impact
+        // energy in a run with hundreds of breaks.
         broken_flag_[e] = 1;
-        released += u;
+        released += 0.5 * (elem_energy_[e] + u);
         stress_[e] = 0;
         elem_force_[e].setZero();
         continue;
       }
+      elem_energy_[e] = u;
       stored += u;
       stress_[e] = Real(sig);
       max_strain = std::max(max_strain, double(eps));
