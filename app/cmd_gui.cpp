@@ -31,6 +31,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <cstdint>
+#include <ctime>
 #include <map>
 
 #include "cli.h"
@@ -45,6 +46,14 @@ namespace ravel::app {
 namespace {
 
 using gui::GuiApp;
+
+// CPU seconds used by this thread (the UI thread: events, ImGui, all GL submission and,
+// under llvmpipe, vertex processing) and by the whole process.
+double cpu_seconds(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 std::string g_glfw_error;
 void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "?"; }
@@ -311,6 +320,13 @@ class ViewCache {
   }
 
   unsigned texture() const { return color_; }
+  // Copy the view into the window's back buffer with its lower-left corner at (x, y).
+  void blit_to_window(int x, int y) const {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+    glBlitFramebuffer(0, 0, w_, h_, x, y, x + w_, y + h_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
   bool valid() const { return valid_; }
   double last_ms() const { return last_ms_; }
   long draws() const { return draws_; }
@@ -477,6 +493,8 @@ int cmd_gui(const Args& args) {
 
       ViewCache view_cache;
       const auto t0 = std::chrono::steady_clock::now();
+      const double ui_cpu0 = cpu_seconds(CLOCK_THREAD_CPUTIME_ID),
+                   process_cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
       auto last_frame_end = t0;
       double worst_frame_ms = 0, view_ms_total = 0;
       long frame = 0;
@@ -532,15 +550,17 @@ int cmd_gui(const Args& args) {
         view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
                           shot_due);
         view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
-        if (view_cache.valid())
-          ImGui::GetBackgroundDrawList()->AddImage(
-              reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(view_cache.texture())),
-              ImVec2(app.view_x, app.view_y), ImVec2(app.view_x + app.view_w, app.view_y + app.view_h),
-              ImVec2(0, 1), ImVec2(1, 0));
         ImGui::Render();
         glViewport(0, 0, fb_w, fb_h);
         glClearColor(0.105f, 0.115f, 0.135f, 1.0f);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        // The cached 3D view is copied into the window 1:1 (a blit: no shader or blending,
+        // slightly cheaper under llvmpipe than ImGui drawing it as a textured quad); the
+        // panels are drawn over it.
+        if (view_cache.valid()) {
+          const int dx = int(app.view_x * sx), dy = fb_h - int((app.view_y + app.view_h) * sy);
+          view_cache.blit_to_window(dx, dy);
+        }
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 
         const auto now = std::chrono::steady_clock::now();
@@ -587,12 +607,16 @@ int cmd_gui(const Args& args) {
           if (std::fscanf(f, "%lf", &load1) != 1) load1 = -1;
           std::fclose(f);
         }
+        const double ui_cpu = cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - ui_cpu0,
+                     process_cpu = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID) - process_cpu0;
         std::printf(
             "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms; while playing %.1f fps over "
-            "%.1f s), 3D view drawn %ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, "
-            "run %ld %s, mu %.2f, load %.2f\n",
+            "%.1f s; UI thread CPU %.1f ms per frame, process CPU %.0f %% of one core), 3D view drawn "
+            "%ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f, "
+            "load %.2f\n",
             frame, wall, double(frame) / wall, worst_frame_ms,
-            playing_s > 0 ? double(playing_frames) / playing_s : 0.0, playing_s, view_cache.draws(),
+            playing_s > 0 ? double(playing_frames) / playing_s : 0.0, playing_s, 1e3 * ui_cpu / double(frame),
+            100.0 * process_cpu / wall, view_cache.draws(),
             view_ms_total / double(std::max(1L, view_cache.draws())), ImGui::GetIO().MetricsRenderVertices,
             sim_at_end_us, app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());

@@ -15,6 +15,7 @@
 #include "model.h"
 #include "simulation.h"
 #include "solver.h"
+#include "tradeoff.h"  // studies/: suggestions from measured speed/accuracy trade-offs
 #ifdef RAVEL_HAVE_SNAPSHOT
 #include "render/frame_recorder.h"  // --frames / --vtk (render/ owner)
 #endif
@@ -139,7 +140,13 @@ int cmd_run(const Args& args) {
       std::printf("  %d VTU frames in %s/vtk/frame.pvd\n", recorder->vtk_written(), a.out_dir.c_str());
 #endif
     const Summary s = sim.summary();
+    // "Model no more than a scene needs": a cheaper setting measured (ravel tradeoff,
+    // assets/tradeoff/<scene>.json) to give the same answer within 1 % (docs/tradeoff.md).
+    const auto suggestions = s.status == RunStatus::completed ? studies::shipped_tradeoff_suggestions(sim.scene())
+                                                              : std::vector<std::string>{};
+    studies::add_suggestions_to_summary(a.out_dir + "/summary.json", suggestions);
     print_summary_line(s, a.out_dir);
+    for (const auto& t : suggestions) std::printf("  suggestion: %s\n", t.c_str());
     if (s.status == RunStatus::diverged) return exit_diverged;
     if (s.status == RunStatus::interrupted) return exit_interrupted;
     return exit_ok;

@@ -29,7 +29,7 @@ struct GuiApp {
   bool camera_needs_fit = true;
   // 3D view resolution while a run plays or the mouse drags (render::ViewOptions::
   // render_scale); the view settles to full resolution when everything is still.
-  float playing_render_scale = 0.75f;
+  float playing_render_scale = 1.0f;
 
   std::string export_dir = "ravel_export";
   std::string notice;            // last export / action result, shown in the status panel

@@ -19,6 +19,8 @@ void usage() {
       "  sweep [SCENE] --vary key=a:b:step|v1,v2 --out DIR [--jobs N] [--shard i/n]   parameter sweep\n"
       "  limit [SCENE] --out DIR [--tolerance MPS]   ballistic limit + Lambert-Jonas fit\n"
       "  paper --out DIR [--quick]  reproduce the paper's studies, DIR/report.md\n"
+      "  tradeoff [SCENE] --out DIR [--quick] [--limit]   error against cost of every speed/accuracy knob\n"
+      "  stability [SCENE] --out DIR [--quick]   map where the methods fail (dt, iterations, velocity)\n"
       "  help                     this text\n\n"
       "SCENE is a TOML file or the name of a shipped scene (default: twaron_ct716).\n"
       "Exit codes: 0 done, 1 output error, 2 bad input, 3 run diverged, 130 interrupted.\n");
@@ -44,6 +46,8 @@ int main(int argc, char** argv) {
   if (cmd == "sweep") return cmd_sweep(rest);
   if (cmd == "limit") return cmd_limit(rest);
   if (cmd == "paper") return cmd_paper(rest);
+  if (cmd == "tradeoff") return cmd_tradeoff(rest);
+  if (cmd == "stability") return cmd_stability(rest);
 #ifdef RAVEL_HAVE_SNAPSHOT
   if (cmd == "snapshot") return cmd_snapshot(rest);
 #endif

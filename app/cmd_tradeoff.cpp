@@ -1,0 +1,228 @@
+// Speed against accuracy and where the methods fail (docs/tradeoff.md):
+//   ravel tradeoff  [SCENE] [--set k=v ...] --out DIR [--quick] [--knob KEY=v1,v2 ...] [--only KEY,KEY]
+//                   [--around scene|reference] [--cost wall|cpu] [--limit] [--jobs N] [--threads N]
+//   ravel stability [SCENE] [--set k=v ...] --out DIR [--quick] [--map NAME ...] [--jobs N] [--threads N]
+// The logic lives in studies/tradeoff.* and studies/stability.*; this file parses flags and prints.
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <thread>
+
+#include "chart.h"
+#include "cli.h"
+#include "commands.h"
+#include "results.h"
+#include "stability.h"
+#include "sweep.h"
+#include "tradeoff.h"
+
+namespace ravel::app {
+
+// app/cmd_run.cpp
+std::atomic<bool>& interrupt_flag();
+void install_signal_handlers();
+
+namespace {
+
+std::string scene_file(const CommonArgs& a) {
+  std::string path = a.scene_path.empty() ? default_scene_path() : a.scene_path;
+  if (!std::filesystem::exists(path)) {
+    const bool has_ext = path.size() > 5 && path.substr(path.size() - 5) == ".toml";
+    const std::string shipped = assets_dir() + "/scenes/" + path + (has_ext ? "" : ".toml");
+    if (std::filesystem::exists(shipped)) path = shipped;
+  }
+  return path;
+}
+
+int jobs_flag(const CommonArgs& a) {
+  auto it = a.flags.find("jobs");
+  if (it == a.flags.end()) return std::max(1u, std::thread::hardware_concurrency());
+  char* end = nullptr;
+  const long j = std::strtol(it->second.c_str(), &end, 10);
+  if (it->second.empty() || *end || j < 1 || j > 1024)
+    throw UsageError("--jobs: expected a whole number 1..1024, got '" + it->second + "'");
+  return int(j);
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string p;
+  while (std::getline(ss, p, sep))
+    if (!p.empty()) out.push_back(p);
+  return out;
+}
+
+void progress_line(bool verbose, const std::string& s) {
+  if (!verbose) return;
+  std::printf("  %s\n", s.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int cmd_tradeoff(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance"},
+                              {"quick", "limit", "quiet"}, {"knob"});
+    if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
+    studies::TradeoffOptions opt;
+    opt.scene_path = scene_file(a);
+    opt.overrides = a.overrides;
+    load_scene(opt.scene_path, opt.overrides);  // bad scene / --set: fail now
+    opt.out_dir = a.out_dir;
+    opt.jobs = jobs_flag(a);
+    opt.solver_threads = a.threads >= 0 ? a.threads : 1;
+    opt.knobs = studies::default_tradeoff_knobs(has_switch(a, "quick"));
+    for (const auto& k : a.multi["knob"]) {
+      // --knob KEY=v1,v2: replaces that knob's list (checked like --vary).
+      const auto v = studies::parse_vary(k, opt.scene_path, opt.overrides);
+      if (!studies::is_tradeoff_knob(v.key))
+        throw UsageError("--knob " + v.key + ": not a speed/accuracy knob (solver.dt_factor, solver.contact_iterations, "
+                         "solver.precision, solver.model, solver.symmetry, fabric.yarns_per_element)");
+      for (auto& kn : opt.knobs)
+        if (kn.key == v.key) kn.values = v.values;
+    }
+    if (a.flags.count("only")) {
+      std::vector<studies::TradeoffKnob> keep;
+      for (const auto& key : split(a.flags["only"], ',')) {
+        bool found = false;
+        for (const auto& kn : opt.knobs)
+          if (kn.key == key || kn.key.substr(kn.key.find('.') + 1) == key) keep.push_back(kn), found = true;
+        if (!found) throw UsageError("--only " + key + ": not a speed/accuracy knob");
+      }
+      opt.knobs = keep;
+    }
+    const std::string around = a.flags.count("around") ? a.flags["around"] : "scene";
+    if (around != "scene" && around != "reference") throw UsageError("--around: expected scene or reference");
+    opt.around_reference = around == "reference";
+    opt.cost = a.flags.count("cost") ? a.flags["cost"] : "wall";
+    if (opt.cost != "wall" && opt.cost != "cpu") throw UsageError("--cost: expected wall or cpu");
+    opt.limit = has_switch(a, "limit");
+    if (a.flags.count("tolerance")) opt.limit_options.tolerance_mps = std::atof(a.flags["tolerance"].c_str());
+    if (!(opt.limit_options.tolerance_mps > 0)) throw UsageError("--tolerance: expected a positive number");
+    opt.note = a.flags.count("note") ? a.flags["note"] : "";
+    opt.date = a.flags.count("date") ? a.flags["date"] : "";
+    const bool verbose = !has_switch(a, "quiet");
+    opt.on_progress = [verbose](const std::string& s) { progress_line(verbose, s); };
+    prepare_output_dir(opt.out_dir);
+    install_signal_handlers();
+    size_t settings = 1;
+    for (const auto& k : opt.knobs) settings += k.values.size();
+    if (verbose)
+      std::printf("tradeoff: %zu knobs, %zu settings (+ reference), %d jobs, cost = %s time, out %s\n",
+                  opt.knobs.size(), settings - 1, opt.jobs, opt.cost.c_str(), opt.out_dir.c_str());
+    std::fflush(stdout);
+    const auto r = studies::run_tradeoff(opt, &interrupt_flag());
+    if (r.interrupted) {
+      std::fprintf(stderr, "ravel: interrupted; finished runs are kept, rerun to resume\n");
+      return exit_interrupted;
+    }
+    write_file_atomic(opt.out_dir + "/tradeoff.csv", studies::tradeoff_csv(r));
+    write_file_atomic(opt.out_dir + "/tradeoff.json", studies::tradeoff_json(r, opt));
+    write_file_atomic(opt.out_dir + "/tradeoff.md", studies::tradeoff_markdown(r, opt));
+    for (const auto& [stem, chart] : studies::tradeoff_charts(r, opt)) studies::write_chart(chart, opt.out_dir + "/" + stem);
+    // The verdict.
+    std::printf("tradeoff: %d runs (%d already finished) in %.0f s\n", r.runs, r.runs_skipped, r.wall_time_s);
+    if (!r.rows.empty())
+      std::printf("  reference (%s): residual velocity %.2f m/s, energy absorbed %.2f J, cost %.2f s\n",
+                  r.rows[0].status.c_str(), r.rows[0].value_q[0], r.rows[0].value_q[1], r.rows[0].cost_s);
+    const int nq = std::any_of(r.rows.begin(), r.rows.end(),
+                               [](const auto& x) { return !std::isnan(x.value_q[studies::q_ballistic_limit]); })
+                       ? 4
+                       : 3;
+    std::printf("  cheapest setting within 1 %% / 5 %% of the reference (%s cost):\n", opt.cost.c_str());
+    std::vector<std::string> knobs;
+    for (const auto& k : opt.knobs) knobs.push_back(k.key);
+    knobs.push_back("");
+    for (const auto& k : knobs) {
+      std::printf("    %-27s", k.empty() ? "any knob" : k.c_str());
+      for (int q = 0; q < nq; ++q) {
+        std::string cellv;
+        for (double tol : {0.01, 0.05}) {
+          const auto e = studies::cheapest_within(r, k, q, tol);
+          char b[96];
+          if (e.found)
+            std::snprintf(b, sizeof b, "%s%s%s", k.empty() ? e.knob.substr(e.knob.find('.') + 1).c_str() : "",
+                          k.empty() ? "=" : "", e.value.c_str());
+          else
+            std::snprintf(b, sizeof b, "none");
+          cellv += (cellv.empty() ? "" : " / ") + std::string(b);
+        }
+        std::printf("  %s: %-18s", studies::quantity_words(q), cellv.c_str());
+      }
+      std::printf("\n");
+    }
+    for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
+    std::printf("  %s/tradeoff.{csv,json,md}, %s/tradeoff_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());
+    return r.rows.empty() || r.rows[0].status == "failed" || r.rows[0].status == "missing" ? exit_failure : exit_ok;
+  } catch (const studies::StudyError& e) {
+    std::fprintf(stderr, "ravel: %s\n", e.what());
+    return exit_usage;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+int cmd_stability(const Args& args) {
+  try {
+    CommonArgs a = parse_args(args, {"jobs", "map"}, {"quick", "quiet"}, {"map"});
+    if (a.out_dir.empty()) throw UsageError("stability needs --out DIR");
+    studies::StabilityOptions opt;
+    opt.scene_path = scene_file(a);
+    opt.overrides = a.overrides;
+    const Scene scene = load_scene(opt.scene_path, opt.overrides);
+    opt.out_dir = a.out_dir;
+    opt.jobs = jobs_flag(a);
+    opt.solver_threads = a.threads >= 0 ? a.threads : 1;
+    opt.maps = studies::default_stability_maps(has_switch(a, "quick"));
+    if (a.multi.count("map")) {
+      std::vector<studies::StabilityMapSpec> keep;
+      for (const auto& name : a.multi["map"]) {
+        bool found = false;
+        for (const auto& m : opt.maps)
+          if (m.name == name) keep.push_back(m), found = true;
+        if (!found) throw UsageError("--map " + name + ": expected dt_factor, friction or velocity");
+      }
+      opt.maps = keep;
+    }
+    const bool verbose = !has_switch(a, "quiet");
+    opt.on_progress = [verbose](const std::string& s) { progress_line(verbose, s); };
+    prepare_output_dir(opt.out_dir);
+    install_signal_handlers();
+    size_t cells = 0;
+    for (const auto& m : opt.maps) cells += m.x.values.size() * m.y.values.size();
+    if (verbose)
+      std::printf("stability: %zu maps, %zu runs, %d jobs, out %s\n", opt.maps.size(), cells, opt.jobs,
+                  opt.out_dir.c_str());
+    std::fflush(stdout);
+    const auto r = studies::run_stability(opt, &interrupt_flag());
+    if (r.interrupted) {
+      std::fprintf(stderr, "ravel: interrupted; finished runs are kept, rerun to resume\n");
+      return exit_interrupted;
+    }
+    write_file_atomic(opt.out_dir + "/stability.csv", studies::stability_csv(r));
+    write_file_atomic(opt.out_dir + "/stability.md", studies::stability_markdown(r, opt));
+    char sub[160];
+    std::snprintf(sub, sizeof sub, "%s at %.0f m/s unless varied", scene.name.c_str(), scene.projectile.velocity_mps);
+    for (const auto& [stem, chart] : studies::stability_charts(r.cells, sub))
+      studies::write_chart(chart, opt.out_dir + "/" + stem, 900, 420);
+    std::printf("stability: %zu cells in %.0f s\n", r.cells.size(), r.wall_time_s);
+    for (const auto& s : studies::stability_sentences(r)) std::printf("  %s\n", s.c_str());
+    for (const auto& e : r.errors) std::fprintf(stderr, "ravel: %s\n", e.c_str());
+    std::printf("  %s/stability.{csv,md}, %s/stability_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());
+    return r.errors.empty() ? exit_ok : exit_failure;
+  } catch (const studies::StudyError& e) {
+    std::fprintf(stderr, "ravel: %s\n", e.what());
+    return exit_usage;
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+}
+
+}  // namespace ravel::app
