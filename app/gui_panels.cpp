@@ -9,6 +9,13 @@
 #include "gui_app.h"
 #include "gui_charts.h"
 #include "results.h"
+#ifdef RAVEL_HAVE_STUDIES_IMGUI
+#include <atomic>
+#include <thread>
+
+#include "chart_imgui.h"
+#include "stability.h"
+#endif
 
 namespace ravel::app::gui {
 
@@ -335,6 +342,115 @@ void export_section(GuiApp& app) {
   ImGui::EndDisabled();
 }
 
+#ifdef RAVEL_HAVE_STUDIES_IMGUI
+// "Stability map" window (docs/tradeoff.md): loads DIR/stability.csv written by
+// `ravel stability`, or runs the small time-step map of the current scene on a background
+// thread (studies::run_stability, into <export folder>/stability), and draws each map
+// with the ImGui chart backend (the same grid chart as the PNG/SVG files).
+struct StabilityWindow {
+  bool open = false;
+  char path[512] = "stability/stability.csv";
+  std::vector<std::pair<std::string, studies::Chart>> charts;
+  std::vector<std::string> sentences;
+  std::string message;
+  std::thread worker;
+  std::atomic<bool> running{false}, interrupt{false};
+  std::string result_csv;  // set by the worker before running = false
+  ~StabilityWindow() {
+    interrupt = true;
+    if (worker.joinable()) worker.join();
+  }
+  void load_text(const std::string& text, const std::string& from) {
+    const auto cells = studies::parse_stability_csv(text);
+    charts = studies::stability_charts(cells, from);
+    message = cells.empty() ? from + ": no cells" : std::to_string(cells.size()) + " cells from " + from;
+  }
+};
+
+StabilityWindow& stability_window() {
+  static StabilityWindow w;
+  return w;
+}
+
+void stability_button(GuiApp&) {
+  StabilityWindow& w = stability_window();
+  if (ImGui::Button("Stability map", ImVec2(ImGui::GetContentRegionAvail().x, 0))) w.open = !w.open;
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Where the methods fail: load stability.csv from 'ravel stability', or map dt_factor here");
+}
+
+void draw_stability_window(GuiApp& app) {
+  StabilityWindow& w = stability_window();
+  if (!w.open) return;
+  if (!w.running && w.worker.joinable()) {  // a map run finished: show it
+    w.worker.join();
+    w.load_text(w.result_csv, "this scene (dt_factor map)");
+  }
+  ImGui::SetNextWindowSize(ImVec2(720, 560), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Stability map", &w.open)) {
+    ImGui::End();
+    return;
+  }
+  ImGui::InputText("stability.csv", w.path, sizeof w.path);
+  ImGui::SameLine();
+  if (ImGui::Button("Load")) {
+    try {
+      w.load_text(studies::read_text_file(w.path), w.path);
+    } catch (const std::exception& e) {
+      w.charts.clear();
+      w.message = e.what();
+    }
+  }
+  ImGui::BeginDisabled(w.running);
+  if (ImGui::Button("Map dt_factor for this scene")) {
+    studies::StabilityOptions opt;
+    opt.scene_path = app.draft.source;
+    try {
+      // The draft as a scene file, so the map runs what the panels show.
+      // A fresh folder: finished cases of an earlier draft would otherwise be resumed.
+      std::filesystem::remove_all(app.export_dir + "/stability/dt_factor");
+      prepare_output_dir(app.export_dir + "/stability");
+      const std::string scene_file = app.export_dir + "/stability/scene.toml";
+      write_file_atomic(scene_file, scene_to_toml(app.draft));
+      opt.scene_path = scene_file;
+      opt.out_dir = app.export_dir + "/stability";
+      opt.maps = {studies::default_stability_maps(true)[0]};
+      opt.jobs = 1;
+      w.interrupt = false;
+      w.running = true;
+      w.message = "running " + std::to_string(opt.maps[0].x.values.size() * opt.maps[0].y.values.size()) +
+                  " runs into " + opt.out_dir + " ...";
+      w.worker = std::thread([&w, opt] {
+        try {
+          const auto r = studies::run_stability(opt, &w.interrupt);
+          w.result_csv = studies::stability_csv(r);
+          write_file_atomic(opt.out_dir + "/stability.csv", w.result_csv);
+        } catch (const std::exception&) {
+          w.result_csv.clear();
+        }
+        w.running = false;
+      });
+    } catch (const std::exception& e) {
+      w.message = e.what();
+    }
+  }
+  ImGui::EndDisabled();
+  if (w.running) {
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) w.interrupt = true;
+  }
+  ImGui::TextWrapped("%s", w.message.c_str());
+  for (const auto& [stem, chart] : w.charts) {
+    const float width = ImGui::GetContentRegionAvail().x;
+    studies::draw_chart_imgui(chart, ImVec2(width, std::max(200.0f, 0.45f * width)));
+  }
+  ImGui::End();
+}
+#else
+void stability_button(GuiApp&) {}
+void draw_stability_window(GuiApp&) {}
+#endif
+
 }  // namespace
 
 bool restart_with_draft(GuiApp& app) {
@@ -391,7 +507,9 @@ void draw_left_panel(GuiApp& app) {
     restart_with_draft(app);
   if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
   if (ImGui::CollapsingHeader("Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
+  stability_button(app);
   ImGui::End();
+  draw_stability_window(app);
 }
 
 namespace {
