@@ -16,6 +16,7 @@ int cmd_keys(const Args& args);       // app/cmd_run.cpp: list scene keys
 int cmd_sweep(const Args& args);      // app/cmd_studies.cpp
 int cmd_limit(const Args& args);      // app/cmd_studies.cpp
 int cmd_paper(const Args& args);      // app/cmd_studies.cpp
+int cmd_demo(const Args& args);       // app/cmd_demo.cpp: guided demos, headless PNGs
 int cmd_tradeoff(const Args& args);   // app/cmd_tradeoff.cpp: speed against accuracy
 int cmd_stability(const Args& args);  // app/cmd_tradeoff.cpp: where the methods fail
 

@@ -19,6 +19,7 @@ void usage() {
       "  sweep [SCENE] --vary key=a:b:step|v1,v2 --out DIR [--jobs N] [--shard i/n]   parameter sweep\n"
       "  limit [SCENE] --out DIR [--tolerance MPS]   ballistic limit + Lambert-Jonas fit\n"
       "  paper --out DIR [--quick]  reproduce the paper's studies, DIR/report.md\n"
+      "  demo NAME --out DIR      a guided demo's key frames as captioned PNGs (demo --list)\n"
       "  tradeoff [SCENE] --out DIR [--quick] [--limit]   error against cost of every speed/accuracy knob\n"
       "  stability [SCENE] --out DIR [--quick]   map where the methods fail (dt, iterations, velocity)\n"
       "  help                     this text\n\n"
@@ -50,6 +51,9 @@ int main(int argc, char** argv) {
   if (cmd == "stability") return cmd_stability(rest);
 #ifdef RAVEL_HAVE_SNAPSHOT
   if (cmd == "snapshot") return cmd_snapshot(rest);
+#endif
+#ifdef RAVEL_HAVE_DEMO
+  if (cmd == "demo") return cmd_demo(rest);
 #endif
 #ifdef RAVEL_HAVE_GUI
   if (cmd.empty() || cmd == "gui") return cmd_gui(rest);
