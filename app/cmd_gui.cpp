@@ -40,6 +40,7 @@
 #include "render/renderer.h"
 #include "results.h"
 #include "sim_worker.h"
+#include "gui_demos.h"
 
 namespace ravel::app {
 
@@ -58,6 +59,8 @@ double cpu_seconds(clockid_t clock) {
 std::string g_glfw_error;
 void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "?"; }
 void* glfw_loader(const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); }
+
+gui::CompareMode* g_compare = nullptr;  // the Demos menu / Compare runs (one per app)
 
 struct ScriptAction {
   std::string action, arg;
@@ -78,7 +81,8 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
       a.action = a.action.substr(0, c2);
     }
     static const char* known[] = {"play", "pause", "step", "reset", "restart", "clear", "fast", "slow",
-                                  "set", "view", "field", "screenshot", "export-results", "export-scene"};
+                                  "set", "view", "field", "screenshot", "export-results", "export-scene",
+                                  "demo", "continue", "compare-exit"};
     if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return a.action == k; }) ==
         std::end(known))
       throw UsageError("--do: unknown action '" + a.action +
@@ -117,6 +121,12 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
     gui::export_results(app);
   } else if (a.action == "export-scene") {
     gui::export_scene(app);
+  } else if (a.action == "demo") {  // the Demos menu (app/gui_demos.h)
+    if (!g_compare || !g_compare->start_demo(app, a.arg)) throw UsageError("--do demo: " + app.notice);
+  } else if (a.action == "continue") {
+    if (g_compare) g_compare->resume();
+  } else if (a.action == "compare-exit") {
+    if (g_compare && g_compare->active()) g_compare->stop(app);
   } else if (a.action == "screenshot") {
     app.screenshot_requested = true;
     app.screenshot_path = a.arg.empty() ? gui::next_screenshot_path(app) : a.arg;
@@ -479,6 +489,8 @@ int cmd_gui(const Args& args) {
       render::Renderer renderer;
       SimWorker worker(scene, has_switch(a, "paused"));
       GuiApp app;
+      gui::CompareMode compare;
+      g_compare = &compare;
       app.worker = &worker;
       app.draft = scene;
       app.view_options = view_options;
@@ -532,8 +544,14 @@ int cmd_gui(const Args& args) {
         const bool dragging = !ImGui::GetIO().WantCaptureMouse &&
                               (ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2));
         gui::draw_left_panel(app);
-        gui::draw_charts_panel(app);
-        gui::draw_status_panel(app);
+        compare.update();
+        if (compare.active()) {
+          compare.draw_panels(app);  // caption, controls and the runs' velocity chart
+        } else {
+          gui::draw_charts_panel(app);
+          gui::draw_status_panel(app);
+        }
+        compare.draw_menu(app);
         draw_help(app);
 
         // The 3D view: the renderer draws the UI's copy of the frame into the cached
@@ -547,7 +565,8 @@ int cmd_gui(const Args& args) {
         const bool shot_due = app.screenshot_requested ||
                               (frames > 0 && frame >= frames && !screenshot.empty());
         const auto v0 = std::chrono::steady_clock::now();
-        view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
+        if (!compare.active())
+          view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
                           shot_due);
         view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
         ImGui::Render();
@@ -557,7 +576,10 @@ int cmd_gui(const Args& args) {
         // The cached 3D view is copied into the window 1:1 (a blit: no shader or blending,
         // slightly cheaper under llvmpipe than ImGui drawing it as a textured quad); the
         // panels are drawn over it.
-        if (view_cache.valid()) {
+        if (compare.active()) {  // split viewports of the compared runs
+          compare.draw_views(renderer, int(app.view_x * sx), fb_h - int((app.view_y + app.view_h) * sy), vw, vh,
+                             ui_scale);
+        } else if (view_cache.valid()) {
           const int dx = int(app.view_x * sx), dy = fb_h - int((app.view_y + app.view_h) * sy);
           view_cache.blit_to_window(dx, dy);
         }

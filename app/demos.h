@@ -115,6 +115,26 @@ struct MeasuredFronts {
 };
 MeasuredFronts measure_fronts(const Scene& scene, const Frame& frame);
 
+// ---- Shared clock (the app's split viewports) ---------------------------------------------
+
+// The clock that keeps 2-4 runs in step (app/gui_demos.h): it advances at the slow-motion
+// rate, never more than `lead_s` ahead of the slowest run, and never past the next stop
+// (a key frame). Each run is paused when it reaches the clock, so the slowest gates all.
+class SharedClock {
+ public:
+  // Simulated seconds per wall second; <= 0: as fast as the slowest run allows.
+  void set_rate(double rate_s_per_s) { rate_ = rate_s_per_s; }
+  double rate() const { return rate_; }
+  // Advance by wall time dt_s. run_times_s: each run's time (a finished run: +inf);
+  // stop_s < 0: no stop. Returns the new time; the clock never goes back.
+  double advance(double dt_s, const std::vector<double>& run_times_s, double stop_s, double lead_s);
+  double time() const { return t_; }
+  void reset() { t_ = 0; }
+
+ private:
+  double t_ = 0, rate_ = 10e-6;
+};
+
 // ---- Runner ----------------------------------------------------------------------------
 
 // Steps every run of a demo to the same simulated time, each on its own thread (a

@@ -117,6 +117,21 @@ TEST(DemoTheory, SmithWaveSatisfiesItsOwnRelation) {
   EXPECT_NEAR(f.longitudinal_m, c * 5e-6, 1e-6);
 }
 
+// The app's shared clock: slow motion at its rate, never more than the lead ahead of the
+// slowest run, never past a stop, never backwards; finished runs do not hold it back.
+TEST(DemoClock, SlowestRunGatesAndKeyFramesStop) {
+  SharedClock c;
+  c.set_rate(10e-6);  // 10 us per wall second
+  EXPECT_NEAR(c.advance(0.1, {0.0, 0.0}, -1, 0.5e-6), 0.5e-6, 1e-12);      // lead-limited
+  EXPECT_NEAR(c.advance(0.1, {2e-6, 0.6e-6}, -1, 0.5e-6), 1.1e-6, 1e-12);  // slowest + lead
+  EXPECT_NEAR(c.advance(0.01, {2e-6, 2e-6}, -1, 5e-6), 1.2e-6, 1e-12);     // rate-limited
+  EXPECT_NEAR(c.advance(1.0, {5e-6, 5e-6}, 3e-6, 5e-6), 3e-6, 1e-12);      // stop at a key frame
+  EXPECT_NEAR(c.advance(1.0, {0.0, 0.0}, -1, 0.5e-6), 3e-6, 1e-12);        // never backwards
+  EXPECT_NEAR(c.advance(0.1, {HUGE_VAL, 3e-6}, -1, 0.5e-6), 3.5e-6, 1e-12);  // a finished run does not gate
+  c.set_rate(0);  // as fast as the slowest run
+  EXPECT_NEAR(c.advance(0.01, {10e-6, 4e-6}, -1, 1e-6), 5e-6, 1e-12);
+}
+
 class DemoRender : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(DemoRender, ReachesItsKeyFramesWithImagesThatAreNotBlankAndDiffer) {

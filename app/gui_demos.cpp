@@ -1,0 +1,371 @@
+// The app's Demos menu and "Compare runs" (app/gui_demos.h).
+#include "gui_demos.h"
+
+#include <glad/gl.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+
+#include "chart_imgui.h"
+#include "demo_render.h"
+#include "gui_app.h"
+#include "render/annotate.h"
+#include "render/renderer.h"
+
+namespace ravel::app::gui {
+
+namespace {
+
+double wall_now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+bool run_done(const WorkerView& v) {
+  return v.state == WorkerState::finished || v.state == WorkerState::diverged;
+}
+
+}  // namespace
+
+// The split views, drawn into a texture when the runs publish new frames (at most every
+// 120 ms while playing), copied into the window every UI frame.
+struct CompareMode::Cache {
+  GLuint fbo = 0, color = 0, depth = 0;
+  int w = 0, h = 0;
+  std::vector<std::uint64_t> serials;
+  std::vector<render::Camera> cameras;
+  double last_draw = 0;
+  bool valid = false;
+  std::unique_ptr<render::Annotator> annotator;
+
+  ~Cache() { release(); }
+  void release() {
+    if (fbo) glDeleteFramebuffers(1, &fbo);
+    if (color) glDeleteTextures(1, &color);
+    if (depth) glDeleteRenderbuffers(1, &depth);
+    fbo = color = depth = 0;
+    w = h = 0;
+    valid = false;
+  }
+  void resize(int nw, int nh) {
+    release();
+    w = nw;
+    h = nh;
+    glGenTextures(1, &color);
+    glBindTexture(GL_TEXTURE_2D, color);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glGenRenderbuffers(1, &depth);
+    glBindRenderbuffer(GL_RENDERBUFFER, depth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
+    glGenFramebuffers(1, &fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color, 0);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    cameras.clear();
+  }
+};
+
+CompareMode::CompareMode() : cache_(std::make_unique<Cache>()) {}
+CompareMode::~CompareMode() = default;
+
+void CompareMode::start(GuiApp& app, const demos::Demo& demo, const std::vector<Scene>& scenes) {
+  workers_.clear();
+  views_.clear();
+  demo_ = demo;
+  app.worker->pause();  // the single run waits behind the comparison
+  for (const Scene& s : scenes) {
+    workers_.push_back(std::make_unique<SimWorker>(s, /*start_paused=*/true));
+    workers_.back()->set_pacing(Pacing{true, 0});
+    workers_.back()->pause_at(0);
+    views_.emplace_back();
+  }
+  clock_.reset();
+  clock_.set_rate(demo.slow_motion_us_per_s * 1e-6);
+  key_ = 0;
+  at_key_ = false;
+  playing_ = true;
+  last_wall_ = -1;
+  caption_ = {demo.title + ": " + demo.summary, "Runs: "};
+  for (std::size_t i = 0; i < demo.runs.size(); ++i) caption_[1] += (i ? ", " : "") + demo.runs[i].label;
+  cache_->cameras.clear();
+  cache_->serials.assign(scenes.size(), ~std::uint64_t(0));
+  app.notice = "started " + demo.title;
+  app.notice_is_error = false;
+}
+
+bool CompareMode::start_demo(GuiApp& app, const std::string& name) {
+  const demos::Demo* d = demos::find_demo(name);
+  if (!d) {
+    app.notice = "no demo '" + name + "'";
+    app.notice_is_error = true;
+    return false;
+  }
+  try {
+    std::vector<Scene> scenes;
+    for (std::size_t i = 0; i < d->runs.size(); ++i) scenes.push_back(demos::demo_scene(*d, i));
+    start(app, *d, scenes);
+    render::parse_view_preset(d->view, &app.view_options.view);
+    return true;
+  } catch (const std::exception& e) {
+    app.notice = std::string("demo: ") + e.what();
+    app.notice_is_error = true;
+    return false;
+  }
+}
+
+bool CompareMode::start_compare(GuiApp& app, const std::vector<std::string>& labels,
+                                const std::vector<std::vector<std::string>>& overrides) {
+  try {
+    demos::Demo d;
+    d.name = "compare";
+    d.title = "Compare runs";
+    d.summary = "the current scene with different values, time kept in step";
+    d.view = render::to_string(app.view_options.view);
+    d.field = render::to_string(app.view_options.field);
+    d.charts = {demos::DemoChart::velocity_history};
+    d.slow_motion_us_per_s = app.pacing.max_speed ? 20 : app.pacing.sim_us_per_wall_s;
+    const std::string base = scene_to_toml(app.draft);
+    std::vector<Scene> scenes;
+    for (std::size_t i = 0; i < overrides.size(); ++i) {
+      Scene s = parse_scene(base, "compare", overrides[i]);
+      s.output.progress = false;
+      d.end_time_us = std::max(d.end_time_us, s.solver.end_time_s * 1e6);
+      d.runs.push_back({labels[i], overrides[i]});
+      scenes.push_back(s);
+    }
+    start(app, d, scenes);
+    return true;
+  } catch (const std::exception& e) {
+    app.notice = std::string("compare: ") + e.what();
+    app.notice_is_error = true;
+    return false;
+  }
+}
+
+void CompareMode::stop(GuiApp& app) {
+  for (auto& w : workers_) w->request_exit();
+  workers_.clear();  // joins
+  views_.clear();
+  app.camera_needs_fit = true;
+  app.notice = "back to the single run";
+}
+
+void CompareMode::resume() {
+  at_key_ = false;
+  playing_ = true;
+  last_wall_ = -1;
+}
+
+double CompareMode::next_stop_s() const {
+  if (key_ < int(demo_.key_frames.size()) && demo_.key_frames[key_].t_us >= 0) return demo_.key_frames[key_].t_us * 1e-6;
+  return -1;
+}
+
+void CompareMode::update() {
+  if (!active()) return;
+  for (std::size_t i = 0; i < workers_.size(); ++i) workers_[i]->sync(views_[i]);
+  std::vector<double> times;
+  double max_dt = 0;
+  bool all_done = true;
+  for (const WorkerView& v : views_) {
+    const bool done = run_done(v) || v.frame.time_s >= demo_.end_time_us * 1e-6 - 0.5 * v.summary.dt_s;
+    times.push_back(done ? HUGE_VAL : v.frame.time_s);
+    max_dt = std::max(max_dt, v.summary.dt_s);
+    all_done = all_done && done;
+  }
+  const double now = wall_now();
+  const double dt_wall = last_wall_ < 0 ? 0 : std::min(0.25, now - last_wall_);
+  last_wall_ = now;
+  if (at_key_ || !playing_) return;
+  const double stop = next_stop_s();
+  const double lead = std::max(0.5e-6, clock_.rate() * 0.3);
+  const double t = clock_.advance(dt_wall, times, stop, lead);
+  for (std::size_t i = 0; i < workers_.size(); ++i) {
+    if (times[i] == HUGE_VAL) continue;
+    if (views_[i].frame.time_s < t - 0.5 * views_[i].summary.dt_s) {
+      workers_[i]->pause_at(t);
+      if (workers_[i]->paused()) workers_[i]->play();
+    }
+  }
+  // A key frame: every run at the stop (within half a step) or ended.
+  bool reached = false;
+  if (key_ < int(demo_.key_frames.size())) {
+    if (stop >= 0) {
+      reached = true;
+      for (std::size_t i = 0; i < views_.size(); ++i)
+        if (times[i] != HUGE_VAL && views_[i].frame.time_s < stop - 0.5 * views_[i].summary.dt_s) reached = false;
+    } else {
+      reached = all_done;
+    }
+  }
+  if (reached) {
+    std::vector<demos::RunState> runs;
+    for (std::size_t i = 0; i < views_.size(); ++i)
+      runs.push_back({demo_.runs[i].label, views_[i].frame, views_[i].summary, views_[i].history});
+    caption_ = demos::caption(demo_, demo_.key_frames[key_], runs);
+    ++key_;
+    at_key_ = true;
+  }
+}
+
+void CompareMode::draw_menu(GuiApp& app) {
+  // Top centre of the 3D view: the corners hold the renderer's caption and colour bar.
+  ImGui::SetNextWindowPos(ImVec2(app.view_x + 0.5f * app.view_w, app.view_y + 4), ImGuiCond_Always, ImVec2(0.5f, 0.0f));
+  ImGui::SetNextWindowBgAlpha(0.85f);
+  if (ImGui::Begin("##demos_menu", nullptr,
+                   ImGuiWindowFlags_MenuBar | ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize |
+                       ImGuiWindowFlags_NoMove | ImGuiWindowFlags_AlwaysAutoResize |
+                       ImGuiWindowFlags_NoSavedSettings)) {
+    if (ImGui::BeginMenuBar()) {
+      if (ImGui::BeginMenu("Demos")) {
+        for (const demos::Demo& d : demos::catalogue()) {
+          if (ImGui::MenuItem(d.title.c_str())) start_demo(app, d.name);
+          if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", d.summary.c_str());
+        }
+        ImGui::EndMenu();
+      }
+      if (ImGui::BeginMenu("Compare")) {
+        if (ImGui::MenuItem("Compare runs...")) show_compare_dialog_ = true;
+        if (ImGui::MenuItem("Back to the single run", nullptr, false, active())) stop(app);
+        ImGui::EndMenu();
+      }
+      ImGui::EndMenuBar();
+    }
+  }
+  ImGui::End();
+  if (!show_compare_dialog_) return;
+  ImGui::SetNextWindowPos(ImVec2(app.view_x + app.view_w * 0.5f, app.view_y + app.view_h * 0.4f), ImGuiCond_Appearing,
+                          ImVec2(0.5f, 0.5f));
+  if (ImGui::Begin("Compare runs", &show_compare_dialog_, ImGuiWindowFlags_AlwaysAutoResize)) {
+    ImGui::TextUnformatted("The current scene (the panels' values) with different settings,");
+    ImGui::TextUnformatted("side by side with time kept in step. One line per run: key=value ...");
+    ImGui::SliderInt("runs", &compare_n_, 2, 4);
+    for (int i = 0; i < compare_n_; ++i) {
+      ImGui::PushID(i);
+      ImGui::InputText("##ov", compare_text_[i], sizeof compare_text_[i]);
+      ImGui::PopID();
+    }
+    if (ImGui::Button("Start")) {
+      std::vector<std::string> labels;
+      std::vector<std::vector<std::string>> ov;
+      for (int i = 0; i < compare_n_; ++i) {
+        std::istringstream ss(compare_text_[i]);
+        std::vector<std::string> items;
+        for (std::string item; ss >> item;) items.push_back(item);
+        ov.push_back(items);
+        labels.push_back(items.empty() ? "as is" : compare_text_[i]);
+      }
+      if (start_compare(app, labels, ov)) show_compare_dialog_ = false;
+    }
+  }
+  ImGui::End();
+}
+
+void CompareMode::draw_panels(GuiApp& app) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(app.left_w, io.DisplaySize.y - app.bottom_h));
+  ImGui::SetNextWindowSize(ImVec2(io.DisplaySize.x - app.left_w, app.bottom_h));
+  ImGui::Begin("##compare_panel", nullptr,
+               ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings);
+  ImGui::TextColored(ImVec4(0.95f, 0.62f, 0.20f, 1.0f), "%s", demo_.title.c_str());
+  ImGui::SameLine();
+  ImGui::Text("  t = %.1f us", clock_.time() * 1e6);
+  if (!demo_.key_frames.empty()) {
+    ImGui::SameLine();
+    ImGui::Text("  key frame %d of %d", key_, int(demo_.key_frames.size()));
+  }
+  for (const auto& line : caption_) ImGui::TextWrapped("%s", line.c_str());
+  if (at_key_) {
+    if (ImGui::Button(key_ < int(demo_.key_frames.size()) ? "Continue" : "Done")) resume();
+  } else {
+    if (ImGui::Button(playing_ ? "Pause" : "Play")) playing_ = !playing_;
+  }
+  ImGui::SameLine();
+  float rate = float(clock_.rate() * 1e6);
+  ImGui::SetNextItemWidth(220);
+  if (ImGui::SliderFloat("us per second", &rate, 0.5f, 200.0f, "%.1f", ImGuiSliderFlags_Logarithmic))
+    clock_.set_rate(rate * 1e-6);
+  ImGui::SameLine();
+  if (ImGui::Button("Exit")) {
+    stop(app);
+    ImGui::End();
+    return;
+  }
+  std::vector<demos::RunState> runs;
+  for (std::size_t i = 0; i < views_.size(); ++i)
+    runs.push_back({demo_.runs[i].label, views_[i].frame, views_[i].summary, views_[i].history});
+  studies::Chart c = demos::velocity_chart(demo_, runs, std::max(clock_.time() * 1e6, 1.0));
+  c.subtitle.clear();
+  studies::draw_chart_imgui(c, ImVec2(ImGui::GetContentRegionAvail().x, ImGui::GetContentRegionAvail().y));
+  ImGui::End();
+}
+
+void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale) {
+  if (!active() || w <= 0 || h <= 0) return;
+  Cache& c = *cache_;
+  if (c.w != w || c.h != h) c.resize(w, h);
+  if (!c.annotator) c.annotator = std::make_unique<render::Annotator>();
+  const int n = int(views_.size());
+  const int cols = n == 4 ? 2 : n, rows = n == 4 ? 2 : 1;
+  render::ViewOptions o;
+  render::parse_view_preset(demo_.view, &o.view);
+  render::parse_color_field(demo_.field, &o.field);
+  o.ui_scale = ui_scale;
+  o.yarn_geometry = render::YarnGeometry::ribbons;
+  bool changed = !c.valid;
+  for (int i = 0; i < n; ++i) changed = changed || views_[i].frame_serial != c.serials[i];
+  const double now = wall_now();
+  if (changed && (now - c.last_draw > 0.12 || at_key_ || !c.valid)) {
+    bool have_all = true;
+    for (const WorkerView& v : views_) have_all = have_all && !v.frame.node_pos.empty();
+    if (have_all) {
+      glBindFramebuffer(GL_FRAMEBUFFER, c.fbo);
+      glViewport(0, 0, w, h);
+      glClearColor(0.08f, 0.09f, 0.12f, 1);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      for (int i = 0; i < n; ++i) {
+        const int cx = i % cols, ry = i / cols;
+        const int vx = cx * w / cols, vw = (cx + 1) * w / cols - vx - (cols > 1 ? 3 : 0);
+        const int vy_top = ry * h / rows, vh = (ry + 1) * h / rows - vy_top - (rows > 1 ? 3 : 0);
+        const int gl_y = h - vy_top - vh;
+        if (int(c.cameras.size()) <= i) {
+          render::Camera cam = render::fitted_camera(views_[i].frame, o.view, float(vw) / float(std::max(1, vh)));
+          if (n > 1 && o.view != render::ViewPreset::top) cam.zoom(0.72f);
+          c.cameras.push_back(cam);
+        }
+        render::ViewOptions oi = o;
+        oi.show_colorbar = i + 1 == n;
+        renderer.draw(views_[i].frame, c.cameras[i], oi, vx, gl_y, vw, vh);
+        std::vector<render::WorldPolyline> lines;
+        if (demo_.overlay == demos::Overlay::wave_fronts)
+          lines = demos::wave_front_lines(views_[i].scene, views_[i].frame, views_[i].frame.time_s);
+        render::TextBlock title;
+        title.x = 10;
+        title.y = -10;
+        title.lines = {demo_.runs[i].label};
+        title.colors = {render::Vec3{1.0f, 0.75f, 0.35f}};
+        title.scale = ui_scale + 1;
+        c.annotator->draw(c.cameras[i], lines, {title}, vx, gl_y, vw, vh);
+        c.serials[i] = views_[i].frame_serial;
+      }
+      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      c.valid = true;
+      c.last_draw = now;
+    }
+  }
+  if (!c.valid) return;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, c.fbo);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
+  glBlitFramebuffer(0, 0, w, h, x, y, x + w, y + h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+}  // namespace ravel::app::gui

@@ -1,0 +1,81 @@
+// The app's Demos menu and "Compare runs": two to four runs in split viewports with
+// their time kept in step, slow motion, pauses at a demo's key frames with its caption.
+//
+// One SimWorker per run (each owns its Simulation on its own thread). A shared clock
+// keeps them in step: the clock advances at the slow-motion rate but never more than a
+// short lead ahead of the slowest run, and every worker is told to pause when it reaches
+// the clock (SimWorker::pause_at) and to play again when the clock moves on. So no run
+// is ever ahead of the clock, the slowest run gates the others, and at a key frame every
+// run stops at the same simulated time (within one time step). The clock logic is in
+// demos::SharedClock (app/demos.h: no GL, no ImGui) so it is unit-tested.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "demos.h"
+#include "sim_worker.h"
+
+namespace ravel::render {
+class Renderer;
+}
+
+namespace ravel::app::gui {
+
+struct GuiApp;
+
+class CompareMode {
+ public:
+  CompareMode();
+  ~CompareMode();
+  bool active() const { return !workers_.empty(); }
+
+  // A small window with a menu bar at the top-left of the 3D view: Demos (the catalogue)
+  // and Compare runs (2-4 runs of the current scene with overrides).
+  void draw_menu(GuiApp& app);
+  // Start a demo by name (false if there is none / its scene is bad; app.notice says why).
+  bool start_demo(GuiApp& app, const std::string& name);
+  // Start a comparison of the app's current (draft) scene with per-run overrides.
+  bool start_compare(GuiApp& app, const std::vector<std::string>& labels,
+                     const std::vector<std::vector<std::string>>& overrides);
+  void stop(GuiApp& app);
+  void resume();  // "Continue" past a key frame
+  void set_playing(bool p) { playing_ = p; }
+
+  // Once per UI frame: sync the workers, advance the shared clock, gate the workers.
+  void update();
+  // The panels of compare mode (caption and controls over the chart area, the velocity
+  // chart of the runs). Call instead of the app's charts panel.
+  void draw_panels(GuiApp& app);
+  // Draw the runs side by side into the window's framebuffer rectangle (GL window
+  // coordinates, y up) from a cached texture, redrawn when the runs publish new frames.
+  void draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale);
+
+  double clock_s() const { return clock_.time(); }
+  int key_index() const { return key_; }
+  bool at_key() const { return at_key_; }
+  const std::vector<WorkerView>& views() const { return views_; }
+
+ private:
+  struct Cache;
+  void start(GuiApp& app, const demos::Demo& demo, const std::vector<Scene>& scenes);
+  double next_stop_s() const;
+
+  demos::Demo demo_;  // the demo (or the comparison as an ad-hoc demo without key frames)
+  std::vector<std::unique_ptr<SimWorker>> workers_;
+  std::vector<WorkerView> views_;
+  demos::SharedClock clock_;
+  int key_ = 0;            // next key frame
+  bool at_key_ = false;    // paused at key frame key_ - 1
+  bool playing_ = true;
+  double last_wall_ = -1;
+  std::vector<std::string> caption_;
+  std::unique_ptr<Cache> cache_;
+  // Compare dialog state.
+  bool show_compare_dialog_ = false;
+  int compare_n_ = 3;
+  char compare_text_[4][256] = {{"yarn.friction=0.02"}, {"yarn.friction=0.2"}, {"yarn.friction=1.0"}, {""}};
+};
+
+}  // namespace ravel::app::gui
