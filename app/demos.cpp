@@ -253,11 +253,11 @@ std::vector<std::string> caption(const Demo& demo, const KeyFrame& key, const st
   std::string broken, vr;
   for (const RunState& r : runs) {
     if (!broken.empty()) broken += "; ";
-    broken += r.label + ": " + std::to_string(r.summary.broken_weft_yarns) + " weft (clamped), " +
-              std::to_string(r.summary.broken_warp_yarns) + " warp (free)";
+    broken += r.label + ": " + std::to_string(r.summary.broken_weft_yarns) + " weft, " +
+              std::to_string(r.summary.broken_warp_yarns) + " warp";
     if (!vr.empty()) vr += ", ";
     const double v = r.history.empty() ? r.summary.impact_velocity_mps : r.history.back().projectile_velocity_mps;
-    vr += r.label + ": " + fmt("%.0f m/s", v);
+    vr += r.label + ": " + fmt("%.0f m/s", std::abs(v) < 0.5 ? 0.0 : v);
   }
   const MeasuredLimit bl = limit_demo_measurement();
   for (std::string& l : lines) {
