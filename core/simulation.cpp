@@ -350,6 +350,12 @@ Summary Simulation::summary() const {
     s.warnings.push_back(std::to_string(d.passed_through) +
                          " crossings found with yarns passed through each other by more than a yarn diameter; released" +
                          at(d.first_pass_time, d.first_pass_i, d.first_pass_j));
+  if (d.balance_drift)
+    s.warnings.push_back("the energy balance drifted past solver.max_balance_error = " +
+                         fmt("%.3g", I.scene.solver.max_balance_error) + " (from t = " +
+                         fmt("%.4g", d.balance_drift_time * 1e6) + " us; worst " + fmt("%.2g", 100 * I.worst_balance) +
+                         " %) slowly, not by an instability: the discretisation error of a long run with many breaks "
+                         "at this time step; lower solver.dt_factor to reduce it");
   if (I.reason == EndReason::end_time)
     s.warnings.push_back("the run reached solver.end_time_us = " + fmt("%.4g", m.end_time * 1e6) +
                          " us undecided (neither perforated nor stopped); raise solver.end_time_us");

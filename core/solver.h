@@ -42,6 +42,8 @@ struct ContactDiagnostics {
   double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
   int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
   double max_penetration = 0;    // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
+  bool balance_drift = false;    // the energy balance drifted past solver.max_balance_error slowly
+  double balance_drift_time = -1;
 };
 
 // Precision-independent view of a solver (the Simulation holds one of two instantiations).
