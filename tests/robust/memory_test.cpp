@@ -9,10 +9,12 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <unistd.h>
 
 #include "results.h"
 #include "sim_worker.h"
+#include "sweep_runner.h"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define RAVEL_UNDER_SANITIZER 1
@@ -85,6 +87,54 @@ TEST(Memory, WorkerRestartsDoNotGrowTheResidentSet) {
   std::printf("RSS after warm-up %.1f MB, after 150 more restarts %.1f MB\n", before, after);
 #ifndef RAVEL_UNDER_SANITIZER
   EXPECT_LT(after - before, 4.0) << "resident set grew by " << after - before << " MB over 150 restarts";
+#endif
+}
+
+// The app running a study in the background while the user keeps editing: a sweep on the
+// SweepRunner thread, the worker taking random edits, the UI polling both. Two whole
+// sweeps: the second may not leave the process bigger than the first did.
+TEST(Memory, StudyInTheBackgroundWhileEditing) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / ("ravel_bg_study_" + std::to_string(getpid()));
+  app::SimWorker w(tiny(), false);
+  double rss_after[2] = {0, 0};
+  for (int round = 0; round < 2; ++round) {
+    studies::SweepRunner runner;
+    studies::SweepOptions opt;
+    opt.overrides = {"fabric.width_mm=16", "fabric.length_mm=16", "projectile.diameter_mm=3", "projectile.mass_g=0.5",
+                     "solver.end_time_us=20", "output.progress=false"};
+    opt.out_dir = (root / ("sweep" + std::to_string(round))).string();
+    opt.jobs = 1;
+    std::string error;
+    ASSERT_TRUE(runner.start(opt, {"projectile.velocity_mps=100:295:5"}, &error)) << error;
+    int edits = 0;
+    app::WorkerView v;
+    const auto deadline = std::chrono::steady_clock::now() + 120s;
+    while (runner.running() && std::chrono::steady_clock::now() < deadline) {
+      switch (edits++ % 4) {
+        case 0: w.restart(tiny("yarn.friction=0." + std::to_string(1 + edits % 5))); break;
+        case 1: w.step_once(3); break;
+        case 2: w.pause(); break;
+        default: w.play(); break;
+      }
+      w.sync(v);
+      const auto snap = runner.snapshot();  // the progress bar and live chart
+      EXPECT_LE(snap.progress.done, snap.progress.total);
+      std::this_thread::sleep_for(5ms);
+    }
+    const auto snap = runner.snapshot();
+    ASSERT_TRUE(snap.finished) << snap.error;
+    EXPECT_EQ(snap.progress.done, 40);
+    EXPECT_EQ(snap.progress.failed, 0);
+    EXPECT_EQ(snap.results.rows.size(), 40u);
+    w.pause();
+    ASSERT_TRUE(w.wait_idle(20s));
+    rss_after[round] = rss_mb();
+    std::printf("round %d: %d edits during the sweep, RSS %.1f MB\n", round, edits, rss_after[round]);
+  }
+  fs::remove_all(root);
+#ifndef RAVEL_UNDER_SANITIZER
+  EXPECT_LT(rss_after[1] - rss_after[0], 4.0) << "a second background sweep grew the process";
 #endif
 }
 
