@@ -1,6 +1,7 @@
 // Speed against accuracy and where the methods fail (docs/tradeoff.md):
 //   ravel tradeoff  [SCENE] [--set k=v ...] --out DIR [--quick] [--knob KEY=v1,v2 ...] [--only KEY,KEY]
-//                   [--around scene|reference] [--cost wall|cpu] [--limit] [--jobs N] [--threads N]
+//                   [--reference KEY=VALUE ...] [--around scene|reference] [--cost wall|cpu] [--limit]
+//                   [--jobs N] [--threads N] [--note TEXT] [--date YYYY-MM-DD]
 //   ravel stability [SCENE] [--set k=v ...] --out DIR [--quick] [--map NAME ...] [--jobs N] [--threads N]
 // The logic lives in studies/tradeoff.* and studies/stability.*; this file parses flags and prints.
 #include <unistd.h>
@@ -68,8 +69,8 @@ void progress_line(bool verbose, const std::string& s) {
 
 int cmd_tradeoff(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance"},
-                              {"quick", "limit", "quiet"}, {"knob"});
+    CommonArgs a = parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance", "reference"},
+                              {"quick", "limit", "quiet"}, {"knob", "reference"});
     if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
     studies::TradeoffOptions opt;
     opt.scene_path = scene_file(a);
@@ -97,6 +98,12 @@ int cmd_tradeoff(const Args& args) {
         if (!found) throw UsageError("--only " + key + ": not a speed/accuracy knob");
       }
       opt.knobs = keep;
+    }
+    for (const auto& r : a.multi["reference"]) {
+      // --reference KEY=VALUE: the reference's value of a knob, instead of the finest.
+      const auto v = studies::parse_vary(r, opt.scene_path, opt.overrides);
+      if (v.values.size() != 1) throw UsageError("--reference " + v.key + ": expected one value");
+      opt.reference_overrides.emplace_back(v.key, v.values[0]);
     }
     const std::string around = a.flags.count("around") ? a.flags["around"] : "scene";
     if (around != "scene" && around != "reference") throw UsageError("--around: expected scene or reference");

@@ -11,6 +11,7 @@
 #include "results.h"
 #ifdef RAVEL_HAVE_STUDIES_IMGUI
 #include <atomic>
+#include <cstdlib>
 #include <thread>
 
 #include "chart_imgui.h"
@@ -369,6 +370,20 @@ struct StabilityWindow {
 
 StabilityWindow& stability_window() {
   static StabilityWindow w;
+  // RAVEL_STABILITY_CSV=FILE opens the window on that file at start (screenshots, tests).
+  static bool from_env = false;
+  if (!from_env) {
+    from_env = true;
+    if (const char* p = std::getenv("RAVEL_STABILITY_CSV")) {
+      std::snprintf(w.path, sizeof w.path, "%s", p);
+      w.open = true;
+      try {
+        w.load_text(studies::read_text_file(w.path), w.path);
+      } catch (const std::exception& e) {
+        w.message = e.what();
+      }
+    }
+  }
   return w;
 }
 
@@ -386,7 +401,7 @@ void draw_stability_window(GuiApp& app) {
     w.worker.join();
     w.load_text(w.result_csv, "this scene (dt_factor map)");
   }
-  ImGui::SetNextWindowSize(ImVec2(720, 560), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(860, 640), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Stability map", &w.open)) {
     ImGui::End();
     return;

@@ -110,6 +110,13 @@ StabilityCell classify_summary(const std::string& text) {
     }
   if (!search.empty() || !pass.empty()) {
     c.status = "warned";
+    // "... slid more than one node in one step N times ..." / "N crossings found with yarns passed through ..."
+    auto count_after = [](const std::string& t, const std::string& marker) {
+      const auto at = t.find(marker);
+      return at == std::string::npos ? std::string("?") : std::to_string(std::atol(t.c_str() + at + marker.size()));
+    };
+    if (!search.empty()) c.detail = "search " + count_after(search, "in one step ");
+    if (!pass.empty()) c.detail += (c.detail.empty() ? "" : ", ") + std::string("pass ") + std::to_string(std::atol(pass.c_str()));
     c.cause = !search.empty() ? (!pass.empty() ? "search+pass" : "search") : "pass_through";
     c.diagnosis = search + (search.empty() || pass.empty() ? "" : "; ") + pass;
     return c;
@@ -188,10 +195,11 @@ StabilityResult run_stability(const StabilityOptions& opt_in, const std::atomic<
 }
 
 std::string stability_csv(const StabilityResult& r) {
-  std::string out = "map,x_key,x_value,y_key,y_value,status,cause,diagnosis,wall_time_s,simulated_us\n";
+  std::string out = "map,x_key,x_value,y_key,y_value,status,cause,detail,diagnosis,wall_time_s,simulated_us\n";
   for (const auto& c : r.cells)
     out += csv_quote(c.map) + "," + csv_quote(c.x_key) + "," + csv_quote(c.x_value) + "," + csv_quote(c.y_key) + "," +
-           csv_quote(c.y_value) + "," + c.status + "," + csv_quote(c.cause) + "," + csv_quote(c.diagnosis) + "," +
+           csv_quote(c.y_value) + "," + c.status + "," + csv_quote(c.cause) + "," + csv_quote(c.detail) + "," +
+           csv_quote(c.diagnosis) + "," +
            fmt("%.3f", c.wall_time_s) + "," + fmt("%.2f", c.end_time_us) + "\n";
   return out;
 }
@@ -201,7 +209,7 @@ std::vector<StabilityCell> parse_stability_csv(const std::string& text) {
   const Csv csv = parse_csv(text);
   auto col = [&](const char* n) { return csv.column(n); };
   const int cm = col("map"), cxk = col("x_key"), cxv = col("x_value"), cyk = col("y_key"), cyv = col("y_value"),
-            cs = col("status"), cc = col("cause"), cd = col("diagnosis"), cw = col("wall_time_s"),
+            cs = col("status"), cc = col("cause"), cdt = col("detail"), cd = col("diagnosis"), cw = col("wall_time_s"),
             ct = col("simulated_us");
   if (cm < 0 || cxv < 0 || cyv < 0 || cs < 0) return out;
   for (const auto& row : csv.rows) {
@@ -214,6 +222,7 @@ std::vector<StabilityCell> parse_stability_csv(const std::string& text) {
     c.y_value = get(cyv);
     c.status = get(cs);
     c.cause = get(cc);
+    c.detail = get(cdt);
     c.diagnosis = get(cd);
     c.wall_time_s = std::atof(get(cw).c_str());
     c.end_time_us = std::atof(get(ct).c_str());
@@ -231,7 +240,7 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
   for (const auto& m : maps) {
     Chart ch;
     Grid& g = ch.grid;
-    g.categories = {"stable", "warned (nearest-pair assumption broke)", "diverged", "failed"};
+    g.categories = {"stable", "warned", "diverged", "failed"};
     g.colors = {{0, 158, 115}, {230, 159, 0}, {213, 94, 0}, {150, 150, 150}};
     std::string xk, yk;
     for (const auto& c : cells) {
@@ -251,14 +260,21 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
       const int k = status_index(c.status);
       g.cells[i] = k;
       if (k >= 0) ++counts[k];
-      std::string t = c.status == "stable" ? "ok" : c.cause.empty() ? c.status : c.cause;
+      // Short cell text: what broke (the diagnosis is in stability.csv / .md).
+      static const std::map<std::string, std::string> shorter{
+          {"energy_balance", "energy"}, {"non_finite", "NaN"},         {"search_lost", "lost"},
+          {"node_escaped", "escaped"},  {"projectile_left_domain", "left"}, {"search+pass", "search, pass"},
+          {"pass_through", "pass"}};
+      std::string t = c.status == "stable" ? "ok" : !c.detail.empty() ? c.detail : c.cause.empty() ? c.status : c.cause;
+      if (shorter.count(t)) t = shorter.at(t);
       std::replace(t.begin(), t.end(), '_', ' ');
       g.cell_text[i] = t;
     }
     ch.title = "Stability map: " + short_key(yk) + " vs " + short_key(xk);
     ch.subtitle = subtitle.empty() ? "" : subtitle + "; ";
     ch.subtitle += std::to_string(counts[0]) + " stable, " + std::to_string(counts[1]) + " warned, " +
-                   std::to_string(counts[2]) + " diverged" + (counts[3] ? ", " + std::to_string(counts[3]) + " failed" : "");
+                   std::to_string(counts[2]) + " diverged" + (counts[3] ? ", " + std::to_string(counts[3]) + " failed" : "") +
+                   " (warned: yarns slid > 1 node in a step, or passed through)";
     ch.x = {xk, ""};
     ch.y = {yk, ""};
     for (const auto& k : scene_keys()) {
@@ -295,7 +311,8 @@ std::vector<std::string> stability_sentences(const StabilityResult& r) {
         for (size_t i = first_bad; i < row.size(); ++i)
           if (row[i]->status == "stable") all_bad_after = false;
         if (first_bad > 0) s += "stable up to " + short_key(m.x.key) + " = " + row[first_bad - 1]->x_value + "; ";
-        else s += "not stable even at " + short_key(m.x.key) + " = " + row[0]->x_value + "; ";
+        else s += std::string(row[0]->status == "diverged" ? "diverged" : "not stable") + " already at " +
+                  short_key(m.x.key) + " = " + row[0]->x_value + "; ";
         std::map<std::string, std::vector<std::string>> by;
         std::vector<std::string> order;
         for (size_t i = first_bad; i < row.size(); ++i) {

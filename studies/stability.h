@@ -35,7 +35,8 @@ struct StabilityCell {
   std::string map, x_key, x_value, y_key, y_value;
   std::string status;                    // stable | warned | diverged | failed
   std::string diagnosis;                 // in words
-  std::string cause;                     // diverged: divergence_cause; warned: search | pass_through
+  std::string cause;                     // diverged: divergence_cause; warned: search | pass_through | search+pass
+  std::string detail;                    // warned: how often ("search 47, pass 22"); the chart's cell text
   double wall_time_s = 0;
   double end_time_us = 0;                // simulated time reached
 };

@@ -275,6 +275,11 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
     finest[k.key] = finest_knob_value(k);
     around[k.key] = opt.around_reference ? finest[k.key] : scene_knob_value(base, k.key);
   }
+  for (const auto& [k, v] : opt.reference_overrides) {
+    if (!finest.count(k)) throw StudyError("--reference " + k + ": not one of the knobs of this study");
+    finest[k] = normalise(k, v);
+    if (opt.around_reference) around[k] = finest[k];
+  }
   auto make_case = [&](const std::map<std::string, std::string>& values) {
     Case c;
     for (const auto& k : keys) c.settings.emplace_back(k, values.at(k));
@@ -479,12 +484,27 @@ std::string tradeoff_json(const TradeoffResult& r, const TradeoffOptions& opt) {
   j["jobs"] = opt.jobs;
   j["solver_threads"] = opt.solver_threads;
   j["note"] = opt.note;
-  j["study_wall_time_s"] = r.wall_time_s;
+  j["study_wall_time_s"] = r.wall_time_s;  // this invocation (small when it resumed finished runs)
+  {
+    // What the runs behind the table cost, each distinct run once.
+    std::set<std::string> seen;
+    double wall = 0, cpu = 0;
+    for (const auto& row : r.rows)
+      if (seen.insert(row.case_name).second) {
+        if (std::isfinite(row.wall_time_s)) wall += row.wall_time_s;
+        if (std::isfinite(row.cpu_time_s)) cpu += row.cpu_time_s;
+      }
+    j["runs"] = int(seen.size());
+    j["runs_wall_time_s"] = wall;
+    j["runs_cpu_time_s"] = cpu;
+  }
   j["tolerances"] = {0.01, 0.05};
   j["reference"] = ojson::object();
   if (!r.rows.empty()) {
     const auto& ref = r.rows[0];
     j["reference"]["case"] = ref.case_name;
+    j["reference"]["changed_from_finest"] = ojson::object();
+    for (const auto& [k, v] : opt.reference_overrides) j["reference"]["changed_from_finest"][k] = v;
     j["reference"]["status"] = ref.status;
     j["reference"]["residual_velocity_mps"] = ref.value_q[0];
     j["reference"]["energy_absorbed_J"] = ref.value_q[1];
@@ -539,14 +559,20 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
   md += std::string("Each knob is varied alone, the others at ") +
         (opt.around_reference ? "their finest values" : "the scene's values") +
         ". Errors are relative to the reference (every knob at its finest: smallest dt_factor, most contact "
-        "iterations, double precision, sliding contact, every yarn modelled, symmetry auto). Cost: " +
+        "iterations, double precision, sliding contact, every yarn modelled, symmetry auto" +
+        [&] {
+          std::string t;
+          for (const auto& [k, v] : opt.reference_overrides) t += (t.empty() ? "; but " : ", ") + k + " = " + v;
+          return t;
+        }() +
+        "). Cost: " +
         (opt.cost == "cpu" ? "user CPU time" : "wall time") + " of the run, " + std::to_string(opt.jobs) +
         " job(s) at a time, " + std::to_string(opt.solver_threads) + " solver thread(s).";
   if (!opt.note.empty()) md += " " + opt.note;
   md += "\n\n";
   if (!r.rows.empty()) {
     const auto& ref = r.rows[0];
-    md += "Reference: " + ref.status + ", residual velocity " + cell(ref.value_q[0], "%.2f") + " m/s, energy absorbed " +
+    md += "Reference (`" + ref.case_name + "`): " + ref.status + ", residual velocity " + cell(ref.value_q[0], "%.2f") + " m/s, energy absorbed " +
           cell(ref.value_q[1], "%.2f") + " J, perforation " +
           (ref.value_q[2] >= 0 ? cell(ref.value_q[2] * 1e6, "%.1f") + " us" : std::string("none")) +
           (std::isnan(ref.value_q[3]) ? "" : ", ballistic limit " + cell(ref.value_q[3], "%.1f") + " m/s") +
@@ -666,7 +692,15 @@ std::vector<std::string> shipped_tradeoff_suggestions(const Scene& scene) {
   const std::string path = shipped_tradeoff_path(scene);
   if (path.empty()) return {};
   try {
-    return tradeoff_suggestions(scene, read_text_file(path));
+    // Within 1 %; for a knob with nothing there, within 5 % (each line says which).
+    const std::string text = read_text_file(path);
+    auto out = tradeoff_suggestions(scene, text, 0.01);
+    for (const auto& s5 : tradeoff_suggestions(scene, text, 0.05)) {
+      const std::string knob = s5.substr(0, s5.find('='));
+      if (std::none_of(out.begin(), out.end(), [&](const std::string& s1) { return s1.rfind(knob + "=", 0) == 0; }))
+        out.push_back(s5);
+    }
+    return out;
   } catch (const std::exception&) {
     return {};
   }
@@ -731,7 +765,7 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
       words += (i == 0 ? "" : i + 1 == best_q.size() ? " and " : ", ") + w;
     }
     out.push_back(knob + "=" + best->value("value", std::string()) + " gives " + words + " within " +
-                  fmt("%g", 100 * tolerance) + " % at " + fmt("%.1f", my_cost / cost_of(*best)) +
+                  fmt("%g", 100 * tolerance) + " % of the reference at " + fmt("%.1f", my_cost / cost_of(*best)) +
                   "x less cost than " + knob + "=" + mine + " (measured by ravel tradeoff on " + date +
                   (std::isfinite(v0) ? ", " + fmt("%.0f", v0) + " m/s" : std::string()) + ")");
   }

@@ -78,6 +78,9 @@ struct TradeoffOptions {
   std::string out_dir;
   std::vector<TradeoffKnob> knobs;  // default_tradeoff_knobs() unless set
   bool around_reference = false;    // other knobs at their finest (true) or the scene's values
+  // Knob values of the reference other than the finest (--reference KEY=VALUE), e.g. when
+  // the finest setting itself diverges. Said in every output.
+  std::vector<std::pair<std::string, std::string>> reference_overrides;
   std::string cost = "wall";        // wall | cpu: the cost the verdict and charts use
   int jobs = 1;
   int solver_threads = 1;
@@ -127,7 +130,8 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
                                               double tolerance = 0.01, double min_ratio = 1.2);
 // assets/tradeoff/<scene name>.json (empty when there is none).
 std::string shipped_tradeoff_path(const Scene& scene);
-// The suggestions from the shipped file for `scene` (none when there is no file).
+// The suggestions from the shipped file for `scene` (none when there is no file): within
+// 1 %, and within 5 % for knobs with nothing within 1 %.
 std::vector<std::string> shipped_tradeoff_suggestions(const Scene& scene);
 // Add "suggestions": [...] to a run's summary.json (rewritten atomically).
 void add_suggestions_to_summary(const std::string& summary_path, const std::vector<std::string>& suggestions);

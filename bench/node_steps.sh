@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Node-steps per second of the default scene at 260 m/s to perforation, for each contact
+# model (sliding, pin_jointed), precision (double, float) and 1 and 2 solver threads.
+# Writes bench/node_steps.csv (docs/tradeoff.md "Benchmark").
+#
+#   bench/node_steps.sh [BUILD_DIR] [REPEATS]      (defaults: build, 3)
+#
+# Each case runs build/bench/bench_impact under bash's `time`, so every row has the wall
+# time and the process's user + system CPU time. The machine's 1-minute load average is
+# read before each run and written into the row: on a shared machine the wall times (and
+# the 2-thread speed-up) depend on it. Repeats are interleaved (all cases once, then again)
+# so load changes spread over every case.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+build="${1:-$here/../build}"
+repeats="${2:-3}"
+bench="$build/bench/bench_impact"
+out="$here/node_steps.csv"
+[ -x "$bench" ] || { echo "node_steps.sh: $bench not found (build first)" >&2; exit 1; }
+
+# libgomp reads OMP_WAIT_POLICY when the program starts, before main() could set it: say
+# it here. Spinning waits (the libgomp default) on a loaded machine made 2 threads burn
+# 14-20x the CPU of 1 thread and run 9-10x slower (measured with this script, load 9-11).
+export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
+
+tmp="$(mktemp)"
+trap 'rm -f "$tmp" "$tmp.t"' EXIT
+{
+  echo "# ravel node-steps per second: default scene (twaron_ct716) at 260 m/s to perforation"
+  echo "# date $(date -u +%Y-%m-%dT%H:%MZ), host $(hostname), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
+  echo "# OMP_WAIT_POLICY=$OMP_WAIT_POLICY"
+  echo "# wall_s: elapsed; user_s/sys_s: CPU time of the process (all threads); load1: 1-minute load average just before the run"
+  echo "model,precision,threads,repeat,nodes,steps,wall_s,user_s,sys_s,node_steps_per_s,node_steps_per_cpu_s,perforated,residual_velocity_mps,load1"
+} > "$tmp"
+for r in $(seq 1 "$repeats"); do
+  for model in sliding pin_jointed; do
+    for prec in double float; do
+      for th in 1 2; do
+        load="$(cut -d' ' -f1 /proc/loadavg)"
+        TIMEFORMAT='%R %U %S'
+        { time "$bench" --set solver.model=$model --set solver.precision=$prec --set solver.threads=$th > "$tmp.t"; } 2> "$tmp.time"
+        read -r real user sys < "$tmp.time"
+        # bench_impact: model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,residual_velocity_mps
+        line="$(tail -n1 "$tmp.t")"
+        IFS=, read -r _m contact _p _t nodes steps _sim wall nsps _ns perf vr <<< "$line"
+        cpu="$(awk -v u="$user" -v s="$sys" 'BEGIN{print u+s}')"
+        per_cpu="$(awk -v n="$nodes" -v k="$steps" -v c="$cpu" 'BEGIN{printf "%.4g", n*k/c}')"
+        echo "$contact,$prec,$th,$r,$nodes,$steps,$wall,$user,$sys,$nsps,$per_cpu,$perf,$vr,$load" >> "$tmp"
+        echo "  $contact $prec threads=$th repeat $r: wall $wall s, cpu $cpu s, $nsps node-steps/s (load $load)" >&2
+      done
+    done
+  done
+done
+rm -f "$tmp.time"
+echo "# load average at end: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$tmp"
+mv "$tmp" "$out"
+trap - EXIT
+echo "wrote $out" >&2
+# Speed-up of 2 threads over 1 (best wall time of the repeats; and the CPU time ratio).
+awk -F, '!/^#/ && $1 != "model" {
+  k = $1 "," $2; w = $7 + 0; c = $8 + $9;
+  if (!(k SUBSEP $3 in best) || w < best[k SUBSEP $3]) { best[k SUBSEP $3] = w; cpu[k SUBSEP $3] = c }
+  keys[k] = 1 }
+  END { for (k in keys) printf "  %-20s 1 thread %.2f s, 2 threads %.2f s: speed-up %.2fx (best wall); CPU time 2 vs 1 thread %.2fx\n",
+        k, best[k SUBSEP 1], best[k SUBSEP 2], best[k SUBSEP 1] / best[k SUBSEP 2], cpu[k SUBSEP 2] / cpu[k SUBSEP 1] }' "$out" >&2
