@@ -4,6 +4,7 @@
 #include <string>
 
 #include "commands.h"
+#include "omp_env.h"
 
 namespace {
 
@@ -31,10 +32,8 @@ void usage() {
 
 int main(int argc, char** argv) {
   using namespace ravel::app;
-  // Solver threads sleep, rather than spin, while they wait at the step's barriers: on a
-  // loaded machine spinning threads starve the ones doing the work (measured: 2 threads
-  // 20x slower than 1 at load 6). Set OMP_WAIT_POLICY=active to override.
-  setenv("OMP_WAIT_POLICY", "passive", 0);
+  // Solver threads sleep rather than spin at the step's barriers (see app/omp_env.h).
+  ensure_passive_omp_wait(argv);
   std::string cmd = argc > 1 ? argv[1] : "";
   Args rest;
   for (int i = 2; i < argc; ++i) rest.push_back(argv[i]);

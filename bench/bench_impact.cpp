@@ -9,9 +9,10 @@
 
 #include "scene.h"
 #include "simulation.h"
+#include "../app/omp_env.h"
 
 int main(int argc, char** argv) {
-  setenv("OMP_WAIT_POLICY", "passive", 0);  // as the ravel executable does (app/main.cpp)
+  ravel::app::ensure_passive_omp_wait(argv);  // as the ravel executable does
   std::vector<std::string> ov{"projectile.velocity_mps=260", "output.progress=false"};
   int repeat = 1;
   std::vector<std::vector<std::string>> cases;
