@@ -45,7 +45,8 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
       } else if (name == "threads") {
         char* end = nullptr;
         long t = std::strtol(value.c_str(), &end, 10);
-        if (value.empty() || *end || t < 0 || t > 256) throw UsageError("--threads: expected a whole number 0..256, got '" + value + "'");
+        if (value.empty() || *end || t < 0 || t > 256)
+          throw UsageError("--threads: expected a whole number 0..256, got '" + value + "'");
         a.threads = int(t);
       } else {
         if (a.flags.count(name) && std::find(repeatable.begin(), repeatable.end(), name) == repeatable.end())
@@ -56,7 +57,8 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
     } else if (s == "-h") {
       throw UsageError("help");
     } else {
-      if (!a.scene_path.empty()) throw UsageError("more than one scene file given ('" + a.scene_path + "' and '" + s + "')");
+      if (!a.scene_path.empty())
+        throw UsageError("more than one scene file given ('" + a.scene_path + "' and '" + s + "')");
       a.scene_path = s;
     }
   }
@@ -68,7 +70,8 @@ Scene load_scene_from(const CommonArgs& a) {
   if (path.empty()) path = default_scene_path();
   // A bare name finds the shipped scene: `ravel run twaron_ct716`.
   if (!std::filesystem::exists(path)) {
-    std::string shipped = assets_dir() + "/scenes/" + path + (path.size() > 5 && path.substr(path.size() - 5) == ".toml" ? "" : ".toml");
+    std::string shipped =
+        assets_dir() + "/scenes/" + path + (path.size() > 5 && path.substr(path.size() - 5) == ".toml" ? "" : ".toml");
     if (std::filesystem::exists(shipped)) path = shipped;
   }
   std::vector<std::string> ov = a.overrides;

@@ -17,13 +17,13 @@ class UsageError : public std::runtime_error {
 };
 
 struct CommonArgs {
-  std::string scene_path;                  // "" = default scene
-  std::vector<std::string> overrides;      // --set k=v, in order
+  std::string scene_path;              // "" = default scene
+  std::vector<std::string> overrides;  // --set k=v, in order
   std::string out_dir;
-  int threads = -1;                        // -1: as the scene says
-  std::map<std::string, std::string> flags;           // --name value / --name=value (last wins)
+  int threads = -1;                                       // -1: as the scene says
+  std::map<std::string, std::string> flags;               // --name value / --name=value (last wins)
   std::map<std::string, std::vector<std::string>> multi;  // every value of repeatable flags
-  std::vector<std::string> switches;       // --name without value
+  std::vector<std::string> switches;                      // --name without value
 };
 
 // `value_flags`: flags that take a value; `switch_flags`: flags without; `repeatable`:

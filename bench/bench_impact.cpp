@@ -1,15 +1,15 @@
 // Benchmark: the default scene at 260 m/s, to perforation or end_time. Prints CSV.
 //   bench_impact [--set k=v ...] [--repeat N]
 #include <chrono>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "../app/omp_env.h"
 #include "scene.h"
 #include "simulation.h"
-#include "../app/omp_env.h"
 
 int main(int argc, char** argv) {
   ravel::app::ensure_passive_omp_wait(argv);  // as the ravel executable does
@@ -17,10 +17,14 @@ int main(int argc, char** argv) {
   int repeat = 1;
   std::vector<std::vector<std::string>> cases;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--set") && i + 1 < argc) ov.push_back(argv[++i]);
-    else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) repeat = std::atoi(argv[++i]);
+    if (!std::strcmp(argv[i], "--set") && i + 1 < argc)
+      ov.push_back(argv[++i]);
+    else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc)
+      repeat = std::atoi(argv[++i]);
   }
-  std::printf("model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,residual_velocity_mps\n");
+  std::printf(
+      "model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,"
+      "residual_velocity_mps\n");
   for (int r = 0; r < repeat; ++r) {
     ravel::Scene scene = ravel::load_scene(ravel::default_scene_path(), ov);
     ravel::Simulation sim(scene);
@@ -30,9 +34,9 @@ int main(int argc, char** argv) {
     const auto s = sim.summary();
     const double ns = double(s.node_count) * double(s.step_count);
     std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f\n", s.model.c_str(), s.contact_model.c_str(),
-                scene.solver.precision == ravel::Precision::double_precision ? "double" : "float",
-                scene.solver.threads, s.node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9,
-                int(s.perforated), s.residual_velocity_mps);
+                scene.solver.precision == ravel::Precision::double_precision ? "double" : "float", scene.solver.threads,
+                s.node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
+                s.residual_velocity_mps);
   }
   return 0;
 }

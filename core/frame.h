@@ -15,26 +15,26 @@ namespace ravel {
 struct Frame {
   // Caption data.
   std::string scene_name;
-  std::string model_label;      // e.g. "quarter, sliding"
+  std::string model_label;  // e.g. "quarter, sliding"
   double time_s = 0.0;
-  double friction = 0.0;        // yarn-yarn mu
+  double friction = 0.0;  // yarn-yarn mu
   double impact_velocity_mps = 0.0;
   bool perforated = false;
 
   // Modelled nodes (a quarter, a half or the full fabric; see mirror_x/mirror_y).
-  std::vector<std::array<float, 3>> node_pos;   // m
-  std::vector<std::array<float, 3>> node_vel;   // m/s
-  std::vector<float> node_slip_rate;            // m/s, sliding speed at the node's crossing (0 when stuck / pin-jointed)
+  std::vector<std::array<float, 3>> node_pos;  // m
+  std::vector<std::array<float, 3>> node_vel;  // m/s
+  std::vector<float> node_slip_rate;           // m/s, sliding speed at the node's crossing (0 when stuck / pin-jointed)
 
   // Yarn elements: straight two-node segments.
-  std::vector<std::uint32_t> elem_a, elem_b;    // node indices
-  std::vector<std::uint8_t> elem_family;        // 0 = warp (runs along y), 1 = weft (runs along x)
-  std::vector<std::uint8_t> elem_broken;        // 1 = failed and removed
-  std::vector<std::uint32_t> elem_yarn;         // yarn id (0.. warp count-1 are warp, then weft)
-  std::vector<float> elem_strain;               // engineering strain
-  std::vector<float> elem_stress_pa;            // axial stress
+  std::vector<std::uint32_t> elem_a, elem_b;  // node indices
+  std::vector<std::uint8_t> elem_family;      // 0 = warp (runs along y), 1 = weft (runs along x)
+  std::vector<std::uint8_t> elem_broken;      // 1 = failed and removed
+  std::vector<std::uint32_t> elem_yarn;       // yarn id (0.. warp count-1 are warp, then weft)
+  std::vector<float> elem_strain;             // engineering strain
+  std::vector<float> elem_stress_pa;          // axial stress
   float failure_strain = 0.052f;
-  float yarn_diameter_m = 0.2e-3f;              // drawn tube diameter (contact diameter D)
+  float yarn_diameter_m = 0.2e-3f;  // drawn tube diameter (contact diameter D)
 
   // Symmetry: the modelled part is mirrored across x = 0 and/or y = 0 to show the whole fabric.
   bool mirror_x = false, mirror_y = false;

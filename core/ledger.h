@@ -7,21 +7,21 @@
 namespace ravel {
 
 struct Ledger {
-  double projectile_ke_J = 0;            // kinetic energy of the projectile
-  double fabric_ke_J = 0;                // kinetic energy of the yarn nodes
-  double strain_energy_J = 0;            // stored: elastic springs of the yarn elements + bending springs
-  double viscous_J = 0;                  // dissipated by the Zener dashpots (integral of mu_d de_v/dt^2)
-  double friction_work_J = 0;            // dissipated by yarn-yarn friction (Eq 12-15)
-  double projectile_friction_J = 0;      // dissipated by projectile-yarn friction (Eq 20-22)
-  double contact_loss_J = 0;             // kinetic energy removed by the normal contact corrections (Eq 9-11, 19)
-  double released_J = 0;                 // energy held by elements at the moment they broke
-  double external_work_J = 0;            // work done on the system by external loads (tests, pull-out)
+  double projectile_ke_J = 0;        // kinetic energy of the projectile
+  double fabric_ke_J = 0;            // kinetic energy of the yarn nodes
+  double strain_energy_J = 0;        // stored: elastic springs of the yarn elements + bending springs
+  double viscous_J = 0;              // dissipated by the Zener dashpots (integral of mu_d de_v/dt^2)
+  double friction_work_J = 0;        // dissipated by yarn-yarn friction (Eq 12-15)
+  double projectile_friction_J = 0;  // dissipated by projectile-yarn friction (Eq 20-22)
+  double contact_loss_J = 0;         // kinetic energy removed by the normal contact corrections (Eq 9-11, 19)
+  double released_J = 0;             // energy held by elements at the moment they broke
+  double external_work_J = 0;        // work done on the system by external loads (tests, pull-out)
 
   // Energy now held or dissipated, less what external loads put in: equals the initial
   // energy for an exact integration.
   double total() const {
-    return projectile_ke_J + fabric_ke_J + strain_energy_J + viscous_J + friction_work_J +
-           projectile_friction_J + contact_loss_J + released_J - external_work_J;
+    return projectile_ke_J + fabric_ke_J + strain_energy_J + viscous_J + friction_work_J + projectile_friction_J +
+           contact_loss_J + released_J - external_work_J;
   }
   Ledger scaled(double f) const {
     Ledger l = *this;

@@ -17,14 +17,14 @@
 namespace ravel {
 
 struct ZenerConstants {
-  double k1, k2, mu;   // Pa, Pa, Pa s
+  double k1, k2, mu;  // Pa, Pa, Pa s
   double tau() const { return mu / (k1 + k2); }
 };
 
 struct ZenerStep {
-  double ev;           // new internal strain
-  double stress;       // Pa, >= 0
-  double dissipated;   // J per m^3 over the step
+  double ev;          // new internal strain
+  double stress;      // Pa, >= 0
+  double dissipated;  // J per m^3 over the step
 };
 
 // The update for a fixed step dt, with everything that does not depend on the element

@@ -38,15 +38,19 @@ Model build_model(const Scene& scene) {
 
   // ---- symmetry (SPEC §6): mirror planes the scene allows
   const bool normal_strike = p.obliquity_deg == 0.0;
-  bool can_x = !single && p.offset_x_m == 0.0 && normal_strike && m.clamped.left == m.clamped.right &&
-               f.width_m == f.width_m;
+  bool can_x =
+      !single && p.offset_x_m == 0.0 && normal_strike && m.clamped.left == m.clamped.right && f.width_m == f.width_m;
   bool can_y = p.offset_y_m == 0.0 && m.clamped.bottom == m.clamped.top;
   std::string why_not;
   if (!can_x) {
-    if (single) why_not += "a single yarn has no x extent to save; ";
-    else if (p.offset_x_m != 0.0) why_not += "off-centre in x; ";
-    else if (!normal_strike) why_not += "oblique strike breaks x symmetry; ";
-    else why_not += "left/right clamps differ; ";
+    if (single)
+      why_not += "a single yarn has no x extent to save; ";
+    else if (p.offset_x_m != 0.0)
+      why_not += "off-centre in x; ";
+    else if (!normal_strike)
+      why_not += "oblique strike breaks x symmetry; ";
+    else
+      why_not += "left/right clamps differ; ";
   }
   if (!can_y) why_not += p.offset_y_m != 0.0 ? "off-centre in y; " : "bottom/top clamps differ; ";
   if (scene.solver.symmetry == SymmetryMode::full) {
@@ -91,9 +95,7 @@ Model build_model(const Scene& scene) {
 
   const double node_mass = f.node_mass_kg * double(k) * double(k);
   const double area = y.area_m2 * k;
-  auto plane_factor = [&](int I, int J) {
-    return (can_x && I == 0 ? 0.5 : 1.0) * (can_y && J == 0 ? 0.5 : 1.0);
-  };
+  auto plane_factor = [&](int I, int J) { return (can_x && I == 0 ? 0.5 : 1.0) * (can_y && J == 0 ? 0.5 : 1.0); };
   auto fixed_bits = [&](int I, int J) {
     std::uint8_t b = 0;
     if (can_x && I == 0) b |= fix_x;
@@ -313,8 +315,10 @@ Model build_model(const Scene& scene) {
     double mid = 0.5 * (lo + hi);
     Vec3d c = strike - mid * m.flight_dir;
     Vec3d nrm;
-    if (m.shape.sdf(Vec3d(strike - c), nrm) < 0) lo = mid;
-    else hi = mid;
+    if (m.shape.sdf(Vec3d(strike - c), nrm) < 0)
+      lo = mid;
+    else
+      hi = mid;
   }
   m.projectile_x0 = strike - hi * m.flight_dir;
   return m;

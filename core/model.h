@@ -28,37 +28,38 @@ enum Family : std::uint8_t { warp = 0, weft = 1 };
 enum FixedAxis : std::uint8_t { fix_x = 1, fix_y = 2, fix_z = 4, fix_all = 7 };
 
 struct Crossing {
-  int warp_yarn = 0, weft_yarn = 0;     // yarn ids
-  int warp_node = 0, weft_node = 0;     // initial nearest node, as position along each yarn
-  int grid_i = 0, grid_j = 0;           // global crossing indices I, J
-  double side = 1.0;                    // n = side * normalize(t_warp x t_weft) points warp -> weft
-  double contact_distance = 0.0;        // D used at this crossing (min of D and the rest distance)
+  int warp_yarn = 0, weft_yarn = 0;  // yarn ids
+  int warp_node = 0, weft_node = 0;  // initial nearest node, as position along each yarn
+  int grid_i = 0, grid_j = 0;        // global crossing indices I, J
+  double side = 1.0;                 // n = side * normalize(t_warp x t_weft) points warp -> weft
+  double contact_distance = 0.0;     // D used at this crossing (min of D and the rest distance)
 };
 
 struct Model {
   // --- what was asked and what was built
-  std::string symmetry_label;           // quarter | half | full
-  std::string symmetry_reason;          // in words
+  std::string symmetry_label;   // quarter | half | full
+  std::string symmetry_reason;  // in words
   ContactModel contact = ContactModel::sliding;
   bool mirror_x = false, mirror_y = false;  // modelled part is x >= 0 / y >= 0
-  double symmetry_factor = 1.0;         // whole-fabric quantity = modelled x factor
-  int lumping = 1;                      // yarns per modelled yarn
+  double symmetry_factor = 1.0;             // whole-fabric quantity = modelled x factor
+  int lumping = 1;                          // yarns per modelled yarn
 
   // --- nodes
   int node_count = 0;
-  std::vector<Vec3d> x0;                // initial positions (m)
-  std::vector<double> mass;             // kg (half / quarter on symmetry planes)
-  std::vector<double> inv_mass;         // 1/kg, 0 for clamped nodes
-  std::vector<std::uint8_t> fixed;      // FixedAxis bits
+  std::vector<Vec3d> x0;            // initial positions (m)
+  std::vector<double> mass;         // kg (half / quarter on symmetry planes)
+  std::vector<double> inv_mass;     // 1/kg, 0 for clamped nodes
+  std::vector<std::uint8_t> fixed;  // FixedAxis bits
 
   // --- yarns: yarn y owns nodes yarn_nodes[yarn_offset[y] .. yarn_offset[y+1])
-  int warp_count = 0, weft_count = 0;   // modelled yarns; warp ids first, then weft
+  int warp_count = 0, weft_count = 0;  // modelled yarns; warp ids first, then weft
   std::vector<int> yarn_offset, yarn_nodes;
   std::vector<std::uint8_t> yarn_family;
-  std::vector<int> yarn_grid;           // global index I (warp) or J (weft)
-  std::vector<int> yarn_elem_offset;    // element k of yarn y is yarn_elem_offset[y] + k
+  std::vector<int> yarn_grid;               // global index I (warp) or J (weft)
+  std::vector<int> yarn_elem_offset;        // element k of yarn y is yarn_elem_offset[y] + k
   std::vector<std::uint8_t> yarn_end_free;  // bit 0: first node is a free end, bit 1: last node
-  std::vector<std::int8_t> yarn_start_mirror;  // first node on the mirror plane x = 0 (0) / y = 0 (1) the yarn crosses; -1 none
+  std::vector<std::int8_t>
+      yarn_start_mirror;  // first node on the mirror plane x = 0 (0) / y = 0 (1) the yarn crosses; -1 none
 
   int yarn_count() const { return int(yarn_family.size()); }
   int yarn_size(int y) const { return yarn_offset[y + 1] - yarn_offset[y]; }
@@ -67,9 +68,9 @@ struct Model {
   // --- elements (straight two-node yarn segments, tension only)
   int element_count = 0;
   std::vector<int> elem_a, elem_b, elem_yarn;
-  std::vector<double> elem_rest;        // initial (crimped) length, m
-  std::vector<double> elem_area;        // m^2 (half for a yarn on a symmetry plane, x k when lumped)
-  std::vector<double> elem_stiffness;   // instantaneous axial stiffness E_inst A / L, N/m
+  std::vector<double> elem_rest;       // initial (crimped) length, m
+  std::vector<double> elem_area;       // m^2 (half for a yarn on a symmetry plane, x k when lumped)
+  std::vector<double> elem_stiffness;  // instantaneous axial stiffness E_inst A / L, N/m
 
   // --- bending: compression-only springs between midpoints of adjoining elements.
   // bend_mirror >= 0 marks the spring that, in the full fabric, joins a yarn's first
@@ -86,26 +87,26 @@ struct Model {
 
   // --- material
   Material material = Material::zener;
-  double k1 = 0, k2 = 0, damping = 0;   // Zener constants, Pa / Pa s
-  double modulus_inst = 0;              // K1 (zener) or E (elastic)
+  double k1 = 0, k2 = 0, damping = 0;  // Zener constants, Pa / Pa s
+  double modulus_inst = 0;             // K1 (zener) or E (elastic)
   double density = 0;
   double failure_strain = 0.052;
   bool breakable = true;
 
   // --- projectile (rigid)
   Shape shape;
-  double projectile_mass = 0;           // modelled (M / symmetry_factor)
-  double projectile_mass_full = 0;      // M
-  double impact_velocity = 0;           // V0, m/s
-  Vec3d flight_dir{0, 0, -1};           // unit direction of flight
+  double projectile_mass = 0;       // modelled (M / symmetry_factor)
+  double projectile_mass_full = 0;  // M
+  double impact_velocity = 0;       // V0, m/s
+  Vec3d flight_dir{0, 0, -1};       // unit direction of flight
   Vec3d projectile_x0{0, 0, 0};
   double projectile_friction = 0.27;
 
   // --- time
-  double dt = 0;                        // s
-  double wave_speed = 0;                // sqrt(E_inst / rho)
+  double dt = 0;          // s
+  double wave_speed = 0;  // sqrt(E_inst / rho)
   double shortest_element = 0;
-  double critical_dt_factor = 1.0;      // estimate of the alpha at which central differences go unstable
+  double critical_dt_factor = 1.0;  // estimate of the alpha at which central differences go unstable
   double end_time = 0;
 
   // --- fabric extent (whole fabric)
@@ -114,9 +115,7 @@ struct Model {
   double thickness = 0;
 
   // Initial energy of the whole system (the projectile's kinetic energy), J, whole fabric.
-  double initial_energy() const {
-    return 0.5 * projectile_mass_full * impact_velocity * impact_velocity;
-  }
+  double initial_energy() const { return 0.5 * projectile_mass_full * impact_velocity * impact_velocity; }
 };
 
 // Build the model a scene asks for, choosing the smallest symmetric part when

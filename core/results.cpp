@@ -1,5 +1,6 @@
 #include "results.h"
 
+#include <unistd.h>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -9,7 +10,6 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
-#include <unistd.h>
 
 namespace ravel {
 
@@ -133,7 +133,8 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["impact_velocity_mps"] = s.impact_velocity_mps;
   j["residual_velocity_mps"] = s.residual_velocity_mps;
   j["energy_absorbed_J"] = s.energy_absorbed_J;
-  j["perforation_time_s"] = s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
+  j["perforation_time_s"] =
+      s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
   j["energy_balance_error"] = s.energy_balance_error;
   j["friction_work_J"] = s.friction_work_J;
   j["yarn_friction"] = scene.yarn.friction;

@@ -2,6 +2,7 @@
 // drives parsing, `--set` overrides, validation messages, to_toml() and `ravel keys`.
 #include "scene.h"
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,7 +11,6 @@
 #include <functional>
 #include <limits>
 #include <sstream>
-#include <toml++/toml.h>
 
 #ifndef RAVEL_ASSETS_DIR
 #define RAVEL_ASSETS_DIR "assets"
@@ -19,8 +19,8 @@
 namespace ravel {
 
 SceneError::SceneError(std::string key, std::string where, std::string problem)
-    : std::runtime_error((where.empty() ? std::string() : where + ": ") +
-                         (key.empty() ? std::string() : key + ": ") + problem),
+    : std::runtime_error((where.empty() ? std::string() : where + ": ") + (key.empty() ? std::string() : key + ": ") +
+                         problem),
       key_(std::move(key)),
       where_(std::move(where)),
       problem_(std::move(problem)) {}
@@ -41,14 +41,23 @@ std::string ClampedEdges::to_string() const {
   return s;
 }
 
-const char* to_string(ContactModel m) { return m == ContactModel::sliding ? "sliding" : "pin_jointed"; }
-const char* to_string(Material m) { return m == Material::zener ? "zener" : "elastic"; }
-const char* to_string(Weave w) { return w == Weave::plain ? "plain" : "single_yarn"; }
+const char* to_string(ContactModel m) {
+  return m == ContactModel::sliding ? "sliding" : "pin_jointed";
+}
+const char* to_string(Material m) {
+  return m == Material::zener ? "zener" : "elastic";
+}
+const char* to_string(Weave w) {
+  return w == Weave::plain ? "plain" : "single_yarn";
+}
 const char* to_string(ShapeKind s) {
   switch (s) {
-    case ShapeKind::sphere: return "sphere";
-    case ShapeKind::cylinder: return "cylinder";
-    case ShapeKind::cone: return "cone";
+    case ShapeKind::sphere:
+      return "sphere";
+    case ShapeKind::cylinder:
+      return "cylinder";
+    case ShapeKind::cone:
+      return "cone";
   }
   return "?";
 }
@@ -65,33 +74,33 @@ struct KeyDef {
   double min = -std::numeric_limits<double>::infinity();
   double max = std::numeric_limits<double>::infinity();
   bool min_exclusive = false;
-  std::vector<std::string> choices;                       // for text enums
-  std::function<void(Scene&, double)> set_number;        // SI value
-  std::function<double(const Scene&)> get_number;        // SI value
+  std::vector<std::string> choices;                // for text enums
+  std::function<void(Scene&, double)> set_number;  // SI value
+  std::function<double(const Scene&)> get_number;  // SI value
   std::function<void(Scene&, const std::string&)> set_text;
   std::function<std::string(const Scene&)> get_text;
 };
 
-#define NUM(KEY, UNIT, DESC, SCALE, MIN, MINEX, MAX, FIELD)                                   \
-  {                                                                                           \
-    KeyDef d{KEY, UNIT, DESC, Type::number, SCALE, MIN, MAX, MINEX, {}, {}, {}, {}, {}};      \
-    d.set_number = [](Scene& s, double v) { s.FIELD = v; };                                   \
-    d.get_number = [](const Scene& s) { return double(s.FIELD); };                            \
-    defs.push_back(std::move(d));                                                             \
+#define NUM(KEY, UNIT, DESC, SCALE, MIN, MINEX, MAX, FIELD)                              \
+  {                                                                                      \
+    KeyDef d{KEY, UNIT, DESC, Type::number, SCALE, MIN, MAX, MINEX, {}, {}, {}, {}, {}}; \
+    d.set_number = [](Scene& s, double v) { s.FIELD = v; };                              \
+    d.get_number = [](const Scene& s) { return double(s.FIELD); };                       \
+    defs.push_back(std::move(d));                                                        \
   }
-#define INT(KEY, UNIT, DESC, MIN, MAX, FIELD)                                                 \
-  {                                                                                           \
-    KeyDef d{KEY, UNIT, DESC, Type::integer, 1.0, MIN, MAX, false, {}, {}, {}, {}, {}};       \
-    d.set_number = [](Scene& s, double v) { s.FIELD = int(v); };                              \
-    d.get_number = [](const Scene& s) { return double(s.FIELD); };                            \
-    defs.push_back(std::move(d));                                                             \
+#define INT(KEY, UNIT, DESC, MIN, MAX, FIELD)                                           \
+  {                                                                                     \
+    KeyDef d{KEY, UNIT, DESC, Type::integer, 1.0, MIN, MAX, false, {}, {}, {}, {}, {}}; \
+    d.set_number = [](Scene& s, double v) { s.FIELD = int(v); };                        \
+    d.get_number = [](const Scene& s) { return double(s.FIELD); };                      \
+    defs.push_back(std::move(d));                                                       \
   }
-#define BOOL(KEY, DESC, FIELD)                                                                \
-  {                                                                                           \
-    KeyDef d{KEY, "", DESC, Type::boolean, 1.0, 0, 1, false, {}, {}, {}, {}, {}};             \
-    d.set_number = [](Scene& s, double v) { s.FIELD = v != 0; };                              \
-    d.get_number = [](const Scene& s) { return s.FIELD ? 1.0 : 0.0; };                       \
-    defs.push_back(std::move(d));                                                             \
+#define BOOL(KEY, DESC, FIELD)                                                    \
+  {                                                                               \
+    KeyDef d{KEY, "", DESC, Type::boolean, 1.0, 0, 1, false, {}, {}, {}, {}, {}}; \
+    d.set_number = [](Scene& s, double v) { s.FIELD = v != 0; };                  \
+    d.get_number = [](const Scene& s) { return s.FIELD ? 1.0 : 0.0; };            \
+    defs.push_back(std::move(d));                                                 \
   }
 
 constexpr double inf = std::numeric_limits<double>::infinity();
@@ -111,44 +120,62 @@ std::vector<KeyDef> make_defs() {
     defs.push_back(d);
   }
   {
-    KeyDef d{"fabric.weave", "", "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)", Type::text};
+    KeyDef d{"fabric.weave", "",
+             "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)",
+             Type::text};
     d.choices = {"plain", "single_yarn"};
-    d.set_text = [](Scene& s, const std::string& v) { s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn; };
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn;
+    };
     d.get_text = [](const Scene& s) { return std::string(to_string(s.fabric.weave)); };
     defs.push_back(d);
   }
   NUM("fabric.width_mm", "mm", "fabric size along x (weft direction)", 1e-3, 0, true, inf, fabric.width_m);
   NUM("fabric.length_mm", "mm", "fabric size along y (warp direction)", 1e-3, 0, true, inf, fabric.length_m);
-  NUM("fabric.spacing_mm", "mm", "L0: horizontal distance between neighbouring nodes of a yarn", 1e-3, 0, true, inf, fabric.spacing_m);
-  NUM("fabric.crossing_gap_mm", "mm", "L1: vertical distance between the two nodes at a crossing", 1e-3, 0, false, inf, fabric.crossing_gap_m);
+  NUM("fabric.spacing_mm", "mm", "L0: horizontal distance between neighbouring nodes of a yarn", 1e-3, 0, true, inf,
+      fabric.spacing_m);
+  NUM("fabric.crossing_gap_mm", "mm", "L1: vertical distance between the two nodes at a crossing", 1e-3, 0, false, inf,
+      fabric.crossing_gap_m);
   NUM("fabric.node_mass_g", "g", "lumped mass m of one yarn node", 1e-3, 0, true, inf, fabric.node_mass_kg);
-  NUM("fabric.thickness_mm", "mm", "fabric thickness; the yarn contact diameter D is half of it", 1e-3, 0, true, inf, fabric.thickness_m);
+  NUM("fabric.thickness_mm", "mm", "fabric thickness; the yarn contact diameter D is half of it", 1e-3, 0, true, inf,
+      fabric.thickness_m);
   {
-    KeyDef d{"fabric.clamped", "", "clamped edges: comma list of left,right (x = -W/2, +W/2), bottom,top (y = -L/2, +L/2), or all / none", Type::text};
+    KeyDef d{"fabric.clamped", "",
+             "clamped edges: comma list of left,right (x = -W/2, +W/2), bottom,top (y = -L/2, +L/2), or all / none",
+             Type::text};
     d.set_text = [](Scene& s, const std::string& v) {
       ClampedEdges c{false, false, false, false};
       std::stringstream ss(v);
       std::string item;
       while (std::getline(ss, item, ',')) {
         item.erase(std::remove_if(item.begin(), item.end(), ::isspace), item.end());
-        if (item == "left") c.left = true;
-        else if (item == "right") c.right = true;
-        else if (item == "bottom") c.bottom = true;
-        else if (item == "top") c.top = true;
-        else if (item == "all") c = {true, true, true, true};
-        else if (item == "none" || item.empty()) {}
-        else throw std::invalid_argument("unknown edge '" + item + "' (use left, right, bottom, top, all or none)");
+        if (item == "left")
+          c.left = true;
+        else if (item == "right")
+          c.right = true;
+        else if (item == "bottom")
+          c.bottom = true;
+        else if (item == "top")
+          c.top = true;
+        else if (item == "all")
+          c = {true, true, true, true};
+        else if (item == "none" || item.empty()) {
+        } else
+          throw std::invalid_argument("unknown edge '" + item + "' (use left, right, bottom, top, all or none)");
       }
       s.fabric.clamped = c;
     };
     d.get_text = [](const Scene& s) { return s.fabric.clamped.to_string(); };
     defs.push_back(d);
   }
-  INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)", 1, 16, fabric.yarns_per_element);
+  INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
+      1, 16, fabric.yarns_per_element);
   {
     KeyDef d{"yarn.material", "", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", Type::text};
     d.choices = {"zener", "elastic"};
-    d.set_text = [](Scene& s, const std::string& v) { s.yarn.material = v == "zener" ? Material::zener : Material::elastic; };
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.yarn.material = v == "zener" ? Material::zener : Material::elastic;
+    };
     d.get_text = [](const Scene& s) { return std::string(to_string(s.yarn.material)); };
     defs.push_back(d);
   }
@@ -161,7 +188,9 @@ std::vector<KeyDef> make_defs() {
   NUM("yarn.failure_strain", "", "element strain at which a yarn element breaks", 1, 0, true, 1.0, yarn.failure_strain);
   BOOL("yarn.breakable", "false: elements never break (energy checks)", yarn.breakable);
   NUM("yarn.friction", "", "yarn-yarn Coulomb friction coefficient mu", 1, 0, false, 10.0, yarn.friction);
-  NUM("yarn.bending_fraction", "", "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0, yarn.bending_fraction);
+  NUM("yarn.bending_fraction", "",
+      "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0,
+      yarn.bending_fraction);
   {
     KeyDef d{"projectile.shape", "", "sphere, cylinder (flat-faced) or cone", Type::text};
     d.choices = {"sphere", "cylinder", "cone"};
@@ -176,25 +205,41 @@ std::vector<KeyDef> make_defs() {
   NUM("projectile.mass_g", "g", "projectile mass M", 1e-3, 0, true, inf, projectile.mass_kg);
   NUM("projectile.velocity_mps", "m/s", "impact velocity V0", 1, 0, true, inf, projectile.velocity_mps);
   NUM("projectile.friction", "", "projectile-yarn friction coefficient mu_p", 1, 0, false, 10.0, projectile.friction);
-  NUM("projectile.offset_x_mm", "mm", "strike point x offset from the fabric centre", 1e-3, -inf, false, inf, projectile.offset_x_m);
-  NUM("projectile.offset_y_mm", "mm", "strike point y offset from the fabric centre", 1e-3, -inf, false, inf, projectile.offset_y_m);
-  NUM("projectile.obliquity_deg", "deg", "angle of the flight path from the fabric normal (in the x-z plane)", 1, 0, false, 80, projectile.obliquity_deg);
+  NUM("projectile.offset_x_mm", "mm", "strike point x offset from the fabric centre", 1e-3, -inf, false, inf,
+      projectile.offset_x_m);
+  NUM("projectile.offset_y_mm", "mm", "strike point y offset from the fabric centre", 1e-3, -inf, false, inf,
+      projectile.offset_y_m);
+  NUM("projectile.obliquity_deg", "deg", "angle of the flight path from the fabric normal (in the x-z plane)", 1, 0,
+      false, 80, projectile.obliquity_deg);
   {
-    KeyDef d{"solver.model", "", "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)", Type::text};
+    KeyDef d{"solver.model", "",
+             "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)",
+             Type::text};
     d.choices = {"sliding", "pin_jointed"};
-    d.set_text = [](Scene& s, const std::string& v) { s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed; };
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed;
+    };
     d.get_text = [](const Scene& s) { return std::string(to_string(s.solver.model)); };
     defs.push_back(d);
   }
   NUM("solver.dt_factor", "", "alpha of Eq 4: dt = alpha L / c", 1, 0, true, 10.0, solver.dt_factor);
-  INT("solver.contact_iterations", "", "N: yarn contact correction passes per step (Eq 16-17)", 1, 64, solver.contact_iterations);
-  BOOL("solver.split_penetration", "true: penetration left from earlier steps is removed by moving the nodes (no energy injected); false: the paper's velocity-only correction", solver.split_penetration);
-  NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0, solver.friction_penalty);
+  INT("solver.contact_iterations", "", "N: yarn contact correction passes per step (Eq 16-17)", 1, 64,
+      solver.contact_iterations);
+  BOOL("solver.split_penetration",
+       "true: penetration left from earlier steps is removed by moving the nodes (no energy injected); false: the "
+       "paper's velocity-only correction",
+       solver.split_penetration);
+  NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0,
+      solver.friction_penalty);
   {
     KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text};
     d.choices = {"auto", "full"};
-    d.set_text = [](Scene& s, const std::string& v) { s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full; };
-    d.get_text = [](const Scene& s) { return std::string(s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full"); };
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full;
+    };
+    d.get_text = [](const Scene& s) {
+      return std::string(s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full");
+    };
     defs.push_back(d);
   }
   {
@@ -208,11 +253,18 @@ std::vector<KeyDef> make_defs() {
     };
     defs.push_back(d);
   }
-  NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true, 1e5, solver.end_time_s);
+  NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true,
+      1e5, solver.end_time_s);
   INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
-  NUM("solver.max_balance_error", "", "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true, 1e3, solver.max_balance_error);
-  NUM("solver.max_search_lost", "", "a run in which the nearest-pair search loses track (yarns sliding more than one node in one step) at more than this fraction of the crossings in one step is declared diverged; 1 = never", 1, 0, false, 1.0, solver.max_search_lost);
-  NUM("output.history_interval_us", "us", "time between rows of history.csv", 1e-6, 0, true, 1e6, output.history_interval_s);
+  NUM("solver.max_balance_error", "",
+      "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true,
+      1e3, solver.max_balance_error);
+  NUM("solver.max_search_lost", "",
+      "a run in which the nearest-pair search loses track (yarns sliding more than one node in one step) at more than "
+      "this fraction of the crossings in one step is declared diverged; 1 = never",
+      1, 0, false, 1.0, solver.max_search_lost);
+  NUM("output.history_interval_us", "us", "time between rows of history.csv", 1e-6, 0, true, 1e6,
+      output.history_interval_s);
   BOOL("output.progress", "print a progress line on a terminal", output.progress);
   return defs;
 }
@@ -251,8 +303,7 @@ std::string did_you_mean(const std::string& key) {
     // Also match the last component alone (`friction` under the wrong section).
     auto dot = d.key.rfind('.');
     auto kdot = key.rfind('.');
-    if (dot != std::string::npos && kdot != std::string::npos &&
-        d.key.substr(dot) == key.substr(kdot))
+    if (dot != std::string::npos && kdot != std::string::npos && d.key.substr(dot) == key.substr(kdot))
       e = std::min<size_t>(e, 2);
     if (e < best_d) best_d = e, best = &d;
   }
@@ -272,7 +323,7 @@ std::string fmt(double v) {
 // range that lands inside it once converted from one of those units gets a hint.
 struct UnitSlip {
   const char* key;
-  double lo, hi;  // usual range, in the key's unit
+  double lo, hi;                                    // usual range, in the key's unit
   std::vector<std::pair<const char*, double>> alt;  // (unit, factor to the key's unit)
 };
 
@@ -334,10 +385,14 @@ void apply_number(Scene& s, const KeyDef& d, double v, const std::string& where)
   const bool below = d.min_exclusive ? v <= d.min : v < d.min;
   if (below || v > d.max) {
     std::string range;
-    if (below && d.min == 0) range = d.min_exclusive ? "must be positive" : "must not be negative";
-    else if (below) range = std::string("must be ") + (d.min_exclusive ? "> " : ">= ") + fmt(d.min);
-    else range = "must be <= " + fmt(d.max);
-    throw SceneError(d.key, where, range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit) + units_hint(d.key, v));
+    if (below && d.min == 0)
+      range = d.min_exclusive ? "must be positive" : "must not be negative";
+    else if (below)
+      range = std::string("must be ") + (d.min_exclusive ? "> " : ">= ") + fmt(d.min);
+    else
+      range = "must be <= " + fmt(d.max);
+    throw SceneError(d.key, where,
+                     range + ", got " + fmt(v) + (d.unit.empty() ? "" : " " + d.unit) + units_hint(d.key, v));
   }
   d.set_number(s, v * d.scale);
 }
@@ -350,11 +405,16 @@ bool valid_utf8(const std::string& v) {
     const unsigned char c = v[i];
     int n;
     unsigned cp;
-    if (c < 0x80) n = 0, cp = c;
-    else if ((c >> 5) == 0x6) n = 1, cp = c & 0x1f;
-    else if ((c >> 4) == 0xe) n = 2, cp = c & 0x0f;
-    else if ((c >> 3) == 0x1e) n = 3, cp = c & 0x07;
-    else return false;
+    if (c < 0x80)
+      n = 0, cp = c;
+    else if ((c >> 5) == 0x6)
+      n = 1, cp = c & 0x1f;
+    else if ((c >> 4) == 0xe)
+      n = 2, cp = c & 0x0f;
+    else if ((c >> 3) == 0x1e)
+      n = 3, cp = c & 0x07;
+    else
+      return false;
     if (i + n >= v.size() && n > 0) return false;
     for (int k = 1; k <= n; ++k) {
       const unsigned char cc = v[i + k];
@@ -369,8 +429,7 @@ bool valid_utf8(const std::string& v) {
 }
 
 void apply_text(Scene& s, const KeyDef& d, const std::string& v, const std::string& where) {
-  if (!valid_utf8(v) || v.find('\0') != std::string::npos)
-    throw SceneError(d.key, where, "is not valid UTF-8 text");
+  if (!valid_utf8(v) || v.find('\0') != std::string::npos) throw SceneError(d.key, where, "is not valid UTF-8 text");
   if (!d.choices.empty() && std::find(d.choices.begin(), d.choices.end(), v) == d.choices.end()) {
     std::string list;
     for (const auto& c : d.choices) list += (list.empty() ? "" : ", ") + c;
@@ -385,10 +444,14 @@ void apply_text(Scene& s, const KeyDef& d, const std::string& v, const std::stri
 
 const char* type_name(Type t) {
   switch (t) {
-    case Type::number: return "a number";
-    case Type::integer: return "a whole number";
-    case Type::boolean: return "true or false";
-    case Type::text: return "a string";
+    case Type::number:
+      return "a number";
+    case Type::integer:
+      return "a whole number";
+    case Type::boolean:
+      return "true or false";
+    case Type::text:
+      return "a string";
   }
   return "?";
 }
@@ -461,22 +524,29 @@ void apply_override(Scene& s, const std::string& kv) {
       std::string low = val;
       std::transform(low.begin(), low.end(), low.begin(), ::tolower);
       double v;
-      if (low == "nan") v = std::numeric_limits<double>::quiet_NaN();
-      else if (low == "inf" || low == "+inf") v = inf;
-      else if (low == "-inf") v = -inf;
+      if (low == "nan")
+        v = std::numeric_limits<double>::quiet_NaN();
+      else if (low == "inf" || low == "+inf")
+        v = inf;
+      else if (low == "-inf")
+        v = -inf;
       else {
         char* end = nullptr;
         v = std::strtod(val.c_str(), &end);
         if (val.empty() || end != val.c_str() + val.size())
-          throw SceneError(key, "--set", "wrong type: expected " + std::string(type_name(d->type)) + ", got '" + val + "'");
+          throw SceneError(key, "--set",
+                           "wrong type: expected " + std::string(type_name(d->type)) + ", got '" + val + "'");
       }
       apply_number(s, *d, v, "--set");
       return;
     }
     case Type::boolean:
-      if (val == "true" || val == "1") d->set_number(s, 1);
-      else if (val == "false" || val == "0") d->set_number(s, 0);
-      else throw SceneError(key, "--set", "wrong type: expected true or false, got '" + val + "'");
+      if (val == "true" || val == "1")
+        d->set_number(s, 1);
+      else if (val == "false" || val == "0")
+        d->set_number(s, 0);
+      else
+        throw SceneError(key, "--set", "wrong type: expected true or false, got '" + val + "'");
       return;
     case Type::text:
       if (val.size() >= 2 && (val.front() == '"' || val.front() == '\'') && val.back() == val.front())
@@ -553,27 +623,29 @@ void validate_scene(Scene& s) {
       fail(f.width_m < 2 * L0 ? "fabric.width_mm" : "fabric.length_mm",
            "the fabric must span at least two yarn spacings (fabric.spacing_mm x fabric.yarns_per_element) each way");
     if (f.width_m / L0 > 4000 || f.length_m / L0 > 4000)
-      fail("fabric.spacing_mm", "more than 4000 yarns per direction (" + fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
+      fail("fabric.spacing_mm", "more than 4000 yarns per direction (" +
+                                    fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
                                     "); this would not fit in memory");
   } else {
     if (f.length_m < 2 * L0) fail("fabric.length_mm", "the yarn must span at least two node spacings");
     if (f.length_m / L0 > 1e6)
       fail("fabric.spacing_mm", "more than a million nodes along the yarn (" + fmt(std::round(f.length_m / L0)) + ")");
   }
-  if (f.crossing_gap_m > L0)
-    fail("fabric.crossing_gap_mm", "L1 larger than the node spacing L0 is not a woven fabric");
+  if (f.crossing_gap_m > L0) fail("fabric.crossing_gap_mm", "L1 larger than the node spacing L0 is not a woven fabric");
   // The projectile against the fabric as a whole (after the fabric itself): a clearer message than "does not
   // fit at the strike point" when no strike point could work.
   const double fabric_min = f.weave == Weave::plain ? std::min(f.width_m, f.length_m) : f.length_m;
   if (p.diameter_m >= fabric_min)
-    fail("projectile.diameter_mm", "the projectile (" + fmt(p.diameter_m * 1e3) + " mm) is larger than the fabric (" +
-                                       (f.weave == Weave::plain ? fmt(f.width_m * 1e3) + " x " + fmt(f.length_m * 1e3)
-                                                                : fmt(f.length_m * 1e3)) +
-                                       " mm); make the fabric larger or the projectile smaller");
+    fail("projectile.diameter_mm",
+         "the projectile (" + fmt(p.diameter_m * 1e3) + " mm) is larger than the fabric (" +
+             (f.weave == Weave::plain ? fmt(f.width_m * 1e3) + " x " + fmt(f.length_m * 1e3) : fmt(f.length_m * 1e3)) +
+             " mm); make the fabric larger or the projectile smaller");
   const double half_x = f.weave == Weave::plain ? f.width_m / 2 : f.length_m / 2;
-  if (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x || std::abs(p.offset_y_m) + p.diameter_m / 2 >= f.length_m / 2) {
+  if (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x ||
+      std::abs(p.offset_y_m) + p.diameter_m / 2 >= f.length_m / 2) {
     const bool off = p.offset_x_m != 0 || p.offset_y_m != 0;
-    fail(off ? (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x ? "projectile.offset_x_mm" : "projectile.offset_y_mm")
+    fail(off ? (std::abs(p.offset_x_m) + p.diameter_m / 2 >= half_x ? "projectile.offset_x_mm"
+                                                                    : "projectile.offset_y_mm")
              : "projectile.diameter_mm",
          "the projectile does not fit inside the fabric at the strike point (check diameter and offsets)");
   }
@@ -606,7 +678,8 @@ void validate_scene(Scene& s) {
   }
   if (ratio > 1 + kNodeMassWarnFraction || ratio < 1 / (1 + kNodeMassWarnFraction))
     s.warnings.push_back("fabric.node_mass_g differs from density x area x element length by " +
-                         fmt(std::round((ratio - 1) * 100)) + " % (tolerance " + fmt(kNodeMassWarnFraction * 100) + " %)");
+                         fmt(std::round((ratio - 1) * 100)) + " % (tolerance " + fmt(kNodeMassWarnFraction * 100) +
+                         " %)");
   if (f.weave == Weave::plain && p.diameter_m > 0.9 * std::min(f.width_m, f.length_m))
     s.warnings.push_back("the projectile is nearly as large as the fabric");
   // Run length: dt = alpha L / c (Eq 4) with the shortest element about L0. A run that
@@ -636,9 +709,9 @@ void validate_scene(Scene& s) {
     const KeyDef* d = find_def(u.key);
     if (!d || !d->get_number) continue;
     if (std::string h = units_hint(u.key, d->get_number(s) / d->scale); !h.empty())
-      s.warnings.push_back(std::string(u.key) + " = " + fmt(d->get_number(s) / d->scale) + (d->unit.empty() ? "" : " " + d->unit) +
-                           " is far outside the usual " + fmt(u.lo) + " .. " + fmt(u.hi) +
-                           (d->unit.empty() ? "" : " " + d->unit) + h);
+      s.warnings.push_back(std::string(u.key) + " = " + fmt(d->get_number(s) / d->scale) +
+                           (d->unit.empty() ? "" : " " + d->unit) + " is far outside the usual " + fmt(u.lo) + " .. " +
+                           fmt(u.hi) + (d->unit.empty() ? "" : " " + d->unit) + h);
   }
 }
 
@@ -649,11 +722,21 @@ std::string toml_string(const std::string& v) {
   std::string o = "\"";
   for (unsigned char ch : v) {
     switch (ch) {
-      case '"': o += "\\\""; break;
-      case '\\': o += "\\\\"; break;
-      case '\n': o += "\\n"; break;
-      case '\t': o += "\\t"; break;
-      case '\r': o += "\\r"; break;
+      case '"':
+        o += "\\\"";
+        break;
+      case '\\':
+        o += "\\\\";
+        break;
+      case '\n':
+        o += "\\n";
+        break;
+      case '\t':
+        o += "\\t";
+        break;
+      case '\r':
+        o += "\\r";
+        break;
       default:
         if (ch < 0x20 || ch == 0x7f) {
           char b[8];
@@ -715,6 +798,8 @@ std::string assets_dir() {
   return RAVEL_ASSETS_DIR;
 }
 
-std::string default_scene_path() { return assets_dir() + "/scenes/twaron_ct716.toml"; }
+std::string default_scene_path() {
+  return assets_dir() + "/scenes/twaron_ct716.toml";
+}
 
 }  // namespace ravel

@@ -30,54 +30,55 @@ struct ClampedEdges {
 
 struct FabricParams {
   Weave weave = Weave::plain;
-  double width_m = 0.120;           // along x
-  double length_m = 0.120;          // along y
-  double spacing_m = 0.844e-3;      // L0, horizontal node spacing
-  double crossing_gap_m = 0.2e-3;   // L1, vertical distance of the two nodes at a crossing
-  double node_mass_kg = 9.4e-8;     // m (paper: 9.4e-5 g)
-  double thickness_m = 0.40e-3;     // fabric thickness; contact diameter D = thickness / 2
+  double width_m = 0.120;          // along x
+  double length_m = 0.120;         // along y
+  double spacing_m = 0.844e-3;     // L0, horizontal node spacing
+  double crossing_gap_m = 0.2e-3;  // L1, vertical distance of the two nodes at a crossing
+  double node_mass_kg = 9.4e-8;    // m (paper: 9.4e-5 g)
+  double thickness_m = 0.40e-3;    // fabric thickness; contact diameter D = thickness / 2
   ClampedEdges clamped;
-  int yarns_per_element = 1;        // k real yarns lumped into one modelled yarn
+  int yarns_per_element = 1;  // k real yarns lumped into one modelled yarn
 };
 
 struct YarnParams {
   Material material = Material::zener;
-  double modulus_pa = 7.28e10;      // elastic modulus E (material = elastic)
-  double k1_pa = 7.28e10;           // Zener spring in series
-  double k2_pa = 4.17e11;           // Zener spring of the Kelvin-Voigt unit
-  double damping_pa_s = 6.26e8;     // Zener dashpot mu_d
+  double modulus_pa = 7.28e10;   // elastic modulus E (material = elastic)
+  double k1_pa = 7.28e10;        // Zener spring in series
+  double k2_pa = 4.17e11;        // Zener spring of the Kelvin-Voigt unit
+  double damping_pa_s = 6.26e8;  // Zener dashpot mu_d
   double density_kg_m3 = 1440.0;
   double area_m2 = 7.64e-8;
-  double failure_strain = 0.052;    // <= 0 or >= 1e9 means unbreakable is not allowed; use `breakable`
+  double failure_strain = 0.052;  // <= 0 or >= 1e9 means unbreakable is not allowed; use `breakable`
   bool breakable = true;
-  double friction = 0.2;            // yarn-yarn Coulomb coefficient mu
-  double bending_fraction = 0.05;   // compression spring stiffness / element axial stiffness
+  double friction = 0.2;           // yarn-yarn Coulomb coefficient mu
+  double bending_fraction = 0.05;  // compression spring stiffness / element axial stiffness
 };
 
 struct ProjectileParams {
   ShapeKind shape = ShapeKind::sphere;
   double diameter_m = 12e-3;
-  double length_m = 12e-3;          // cylinder length / cone height
+  double length_m = 12e-3;  // cylinder length / cone height
   double mass_kg = 7e-3;
   double velocity_mps = 260.0;
-  double friction = 0.27;           // projectile-yarn mu_p
-  double offset_x_m = 0.0;          // strike point relative to the fabric centre
+  double friction = 0.27;   // projectile-yarn mu_p
+  double offset_x_m = 0.0;  // strike point relative to the fabric centre
   double offset_y_m = 0.0;
-  double obliquity_deg = 0.0;       // angle between the flight path and the fabric normal, in the x-z plane
+  double obliquity_deg = 0.0;  // angle between the flight path and the fabric normal, in the x-z plane
 };
 
 struct SolverParams {
   ContactModel model = ContactModel::sliding;
-  double dt_factor = 0.5;           // alpha of Eq 4
-  int contact_iterations = 1;       // N of Eq 16-17
-  double friction_penalty = 0.25;   // alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12)
-  bool split_penetration = true;    // resolve penetration left from earlier steps by moving nodes, not by velocity
+  double dt_factor = 0.5;          // alpha of Eq 4
+  int contact_iterations = 1;      // N of Eq 16-17
+  double friction_penalty = 0.25;  // alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12)
+  bool split_penetration = true;   // resolve penetration left from earlier steps by moving nodes, not by velocity
   SymmetryMode symmetry = SymmetryMode::automatic;
   Precision precision = Precision::double_precision;
   double end_time_s = 150e-6;
   int threads = 1;                  // 0 = all cores
   double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
-  double max_search_lost = 0.01;    // nearest-pair search lost at more than this fraction of crossings in one step -> diverged
+  double max_search_lost =
+      0.01;  // nearest-pair search lost at more than this fraction of crossings in one step -> diverged
 };
 
 struct OutputParams {
@@ -87,7 +88,7 @@ struct OutputParams {
 
 struct Scene {
   std::string name = "twaron_ct716";
-  std::string source;               // file it came from ("" for built-in defaults)
+  std::string source;  // file it came from ("" for built-in defaults)
   FabricParams fabric;
   YarnParams yarn;
   ProjectileParams projectile;

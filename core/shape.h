@@ -13,8 +13,8 @@ namespace ravel {
 
 struct Shape {
   ShapeKind kind = ShapeKind::sphere;
-  double radius = 6e-3;   // sphere / cylinder / cone base radius
-  double length = 12e-3;  // cylinder length / cone height
+  double radius = 6e-3;            // sphere / cylinder / cone base radius
+  double length = 12e-3;           // cylinder length / cone height
   Eigen::Vector3d axis{0, 0, -1};  // unit, pointing forward (direction of flight)
 
   // Bounding radius about the centre, for cheap rejection.
@@ -29,8 +29,10 @@ struct Shape {
     using R = typename V::Scalar;
     if (kind == ShapeKind::sphere) {
       R r = p_in.norm();
-      if (r > R(0)) normal = p_in / r;
-      else normal = -axis.cast<R>();
+      if (r > R(0))
+        normal = p_in / r;
+      else
+        normal = -axis.cast<R>();
       return double(r) - radius;
     }
     // Local frame: h along the axis (forward positive), q radial distance.

@@ -13,22 +13,32 @@ namespace ravel {
 
 const char* to_string(RunStatus s) {
   switch (s) {
-    case RunStatus::running: return "running";
-    case RunStatus::completed: return "completed";
-    case RunStatus::diverged: return "diverged";
-    case RunStatus::interrupted: return "interrupted";
+    case RunStatus::running:
+      return "running";
+    case RunStatus::completed:
+      return "completed";
+    case RunStatus::diverged:
+      return "diverged";
+    case RunStatus::interrupted:
+      return "interrupted";
   }
   return "?";
 }
 
 const char* to_string(EndReason r) {
   switch (r) {
-    case EndReason::none: return "none";
-    case EndReason::perforated: return "perforated";
-    case EndReason::rebounded: return "rebounded";
-    case EndReason::end_time: return "end_time";
-    case EndReason::diverged: return "diverged";
-    case EndReason::interrupted: return "interrupted";
+    case EndReason::none:
+      return "none";
+    case EndReason::perforated:
+      return "perforated";
+    case EndReason::rebounded:
+      return "rebounded";
+    case EndReason::end_time:
+      return "end_time";
+    case EndReason::diverged:
+      return "diverged";
+    case EndReason::interrupted:
+      return "interrupted";
   }
   return "?";
 }
@@ -134,7 +144,8 @@ struct Simulation::Impl {
     for (int c = 0; c < int(m.crossings.size()); ++c) {
       if (!solver->crossing_active(c) || solver->crossing_gap(c) > m.crossings[c].contact_distance) continue;
       const auto& cr = m.crossings[c];
-      join(m.yarn_node(cr.warp_yarn, solver->crossing_warp_node(c)), m.yarn_node(cr.weft_yarn, solver->crossing_weft_node(c)));
+      join(m.yarn_node(cr.warp_yarn, solver->crossing_warp_node(c)),
+           m.yarn_node(cr.weft_yarn, solver->crossing_weft_node(c)));
     }
     std::vector<char> root_anchor(n, 0);
     bool any = false;
@@ -209,13 +220,13 @@ struct Simulation::Impl {
       if (xp.norm() > 10 * (model().half_width + model().half_length) + 1) {
         diverge("projectile_left_domain",
                 std::string("the projectile left the domain (more than 10 fabric sizes from the centre) without ") +
-                    (solver->had_contact() ? "perforating" : "touching the fabric: it crossed the fabric within one time step"));
+                    (solver->had_contact() ? "perforating"
+                                           : "touching the fabric: it crossed the fabric within one time step"));
         return false;
       }
     }
     if (solver->time() >= model().end_time - 0.5 * model().dt) {
-      finish(RunStatus::completed, EndReason::end_time,
-             "reached solver.end_time_us before perforation or rebound");
+      finish(RunStatus::completed, EndReason::end_time, "reached solver.end_time_us before perforation or rebound");
       return false;
     }
     return true;
@@ -227,16 +238,17 @@ struct Simulation::Impl {
     fault_step = solver->steps();
     fault_time = solver->time();
     finish(RunStatus::diverged, EndReason::diverged,
-           "diverged at step " + std::to_string(fault_step) + " (t = " + fmt("%.4g", fault_time * 1e6) + " us): " + why +
-               ". " + advice());
+           "diverged at step " + std::to_string(fault_step) + " (t = " + fmt("%.4g", fault_time * 1e6) +
+               " us): " + why + ". " + advice());
   }
 
   std::string advice() const {
     const Model& m = model();
     const double alpha = scene.solver.dt_factor;
     if (alpha > 0.9 * m.critical_dt_factor)
-      return "solver.dt_factor = " + fmt("%.3g", alpha) + " is at or beyond the central-difference stability limit (about " +
-             fmt("%.2f", m.critical_dt_factor) + " for this mesh): lower solver.dt_factor (default 0.5)";
+      return "solver.dt_factor = " + fmt("%.3g", alpha) +
+             " is at or beyond the central-difference stability limit (about " + fmt("%.2f", m.critical_dt_factor) +
+             " for this mesh): lower solver.dt_factor (default 0.5)";
     return "lower solver.dt_factor (default 0.5) or raise solver.contact_iterations; check the scene's units";
   }
 };
@@ -253,7 +265,9 @@ Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 Simulation::~Simulation() = default;
 
-bool Simulation::step() { return impl_->step(); }
+bool Simulation::step() {
+  return impl_->step();
+}
 
 void Simulation::run(const std::atomic<bool>* interrupt, const std::function<void(const Simulation&)>& on_sample) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -276,15 +290,33 @@ void Simulation::interrupt(const std::string& why) {
   impl_->finish(RunStatus::interrupted, EndReason::interrupted, why);
 }
 
-bool Simulation::finished() const { return impl_->status != RunStatus::running; }
-double Simulation::time_s() const { return impl_->solver->time(); }
-long Simulation::step_count() const { return impl_->solver->steps(); }
-double Simulation::dt_s() const { return impl_->model().dt; }
-const Scene& Simulation::scene() const { return impl_->scene; }
-const std::vector<HistoryRow>& Simulation::history() const { return impl_->history; }
-const Solver& Simulation::solver() const { return *impl_->solver; }
-Solver& Simulation::solver() { return *impl_->solver; }
-std::uint64_t Simulation::state_hash() const { return impl_->solver->state_hash(); }
+bool Simulation::finished() const {
+  return impl_->status != RunStatus::running;
+}
+double Simulation::time_s() const {
+  return impl_->solver->time();
+}
+long Simulation::step_count() const {
+  return impl_->solver->steps();
+}
+double Simulation::dt_s() const {
+  return impl_->model().dt;
+}
+const Scene& Simulation::scene() const {
+  return impl_->scene;
+}
+const std::vector<HistoryRow>& Simulation::history() const {
+  return impl_->history;
+}
+const Solver& Simulation::solver() const {
+  return *impl_->solver;
+}
+Solver& Simulation::solver() {
+  return *impl_->solver;
+}
+std::uint64_t Simulation::state_hash() const {
+  return impl_->solver->state_hash();
+}
 
 Summary Simulation::summary() const {
   const Impl& I = *impl_;
@@ -337,25 +369,30 @@ Summary Simulation::summary() const {
   s.warnings = I.warnings;
   const auto& d = I.solver->diagnostics();
   auto at = [](double t, int i, int j) {
-    return " (first at t = " + fmt("%.3g", t * 1e6) + " us, crossing I=" + std::to_string(i) + ", J=" + std::to_string(j) + ")";
+    return " (first at t = " + fmt("%.3g", t * 1e6) + " us, crossing I=" + std::to_string(i) +
+           ", J=" + std::to_string(j) + ")";
   };
   if (d.skipped_nodes)
     s.warnings.push_back("nearest-pair search: yarns slid more than one node in one step " +
-                         std::to_string(d.skipped_nodes) + " times" + at(d.first_skip_time, d.first_skip_i, d.first_skip_j) +
+                         std::to_string(d.skipped_nodes) + " times" +
+                         at(d.first_skip_time, d.first_skip_i, d.first_skip_j) +
                          "; the 3 x 3 search assumes at most one; lower solver.dt_factor");
   if (d.ravelled)
-    s.warnings.push_back(std::to_string(d.ravelled) + " crossings ravelled out (a yarn slipped off its partner's free or broken end) and were released" +
-                         at(d.first_ravel_time, d.first_ravel_i, d.first_ravel_j));
+    s.warnings.push_back(
+        std::to_string(d.ravelled) +
+        " crossings ravelled out (a yarn slipped off its partner's free or broken end) and were released" +
+        at(d.first_ravel_time, d.first_ravel_i, d.first_ravel_j));
   if (d.passed_through)
-    s.warnings.push_back(std::to_string(d.passed_through) +
-                         " crossings found with yarns passed through each other by more than a yarn diameter; released" +
-                         at(d.first_pass_time, d.first_pass_i, d.first_pass_j));
+    s.warnings.push_back(
+        std::to_string(d.passed_through) +
+        " crossings found with yarns passed through each other by more than a yarn diameter; released" +
+        at(d.first_pass_time, d.first_pass_i, d.first_pass_j));
   if (d.balance_drift)
-    s.warnings.push_back("the energy balance drifted past solver.max_balance_error = " +
-                         fmt("%.3g", I.scene.solver.max_balance_error) + " (from t = " +
-                         fmt("%.4g", d.balance_drift_time * 1e6) + " us; worst " + fmt("%.2g", 100 * I.worst_balance) +
-                         " %) slowly, not by an instability: the discretisation error of a long run with many breaks "
-                         "at this time step; lower solver.dt_factor to reduce it");
+    s.warnings.push_back(
+        "the energy balance drifted past solver.max_balance_error = " + fmt("%.3g", I.scene.solver.max_balance_error) +
+        " (from t = " + fmt("%.4g", d.balance_drift_time * 1e6) + " us; worst " + fmt("%.2g", 100 * I.worst_balance) +
+        " %) slowly, not by an instability: the discretisation error of a long run with many breaks "
+        "at this time step; lower solver.dt_factor to reduce it");
   if (I.reason == EndReason::end_time)
     s.warnings.push_back("the run reached solver.end_time_us = " + fmt("%.4g", m.end_time * 1e6) +
                          " us undecided (neither perforated nor stopped); raise solver.end_time_us");

@@ -32,17 +32,17 @@ struct HistoryRow {
   double balance_error = 0;                                // (sum of ledger - initial) / initial
   int broken_warp = 0, broken_weft = 0;                    // broken elements per family (whole fabric)
   double max_strain = 0;
-  double projectile_contact_force_N = 0;                   // magnitude, whole projectile
-  double yarn_contact_force_N = 0;                         // sum of yarn-yarn normal forces (whole fabric)
+  double projectile_contact_force_N = 0;  // magnitude, whole projectile
+  double yarn_contact_force_N = 0;        // sum of yarn-yarn normal forces (whole fabric)
   int nodes_on_projectile = 0;
-  int sliding_crossings = 0, stuck_crossings = 0;          // whole fabric; 0 for pin-jointed
+  int sliding_crossings = 0, stuck_crossings = 0;  // whole fabric; 0 for pin-jointed
 };
 
 struct Summary {
   std::string scene_name;
   RunStatus status = RunStatus::running;
   EndReason end_reason = EndReason::none;
-  std::string diagnosis;               // why it diverged / was interrupted, in words
+  std::string diagnosis;  // why it diverged / was interrupted, in words
   // A diverged run: what stopped it (non_finite, energy_balance, node_escaped,
   // projectile_left_domain, search_lost), the step it happened in and the simulated time.
   std::string divergence_cause;
@@ -50,14 +50,14 @@ struct Summary {
   double divergence_time_s = -1;
   bool perforated = false;
   double impact_velocity_mps = 0;
-  double residual_velocity_mps = 0;    // speed along the flight path at the end (perforation: exit speed)
-  double energy_absorbed_J = 0;        // M (V0^2 - Vr^2) / 2
-  double perforation_time_s = -1;      // < 0: none
-  double energy_balance_error = 0;     // worst |balance error| over the run
-  double friction_work_J = 0;          // yarn-yarn friction work
-  std::string model;                   // quarter | half | full
-  std::string model_reason;            // why that model
-  std::string contact_model;           // sliding | pin_jointed
+  double residual_velocity_mps = 0;  // speed along the flight path at the end (perforation: exit speed)
+  double energy_absorbed_J = 0;      // M (V0^2 - Vr^2) / 2
+  double perforation_time_s = -1;    // < 0: none
+  double energy_balance_error = 0;   // worst |balance error| over the run
+  double friction_work_J = 0;        // yarn-yarn friction work
+  std::string model;                 // quarter | half | full
+  std::string model_reason;          // why that model
+  std::string contact_model;         // sliding | pin_jointed
   int node_count = 0, element_count = 0, crossing_count = 0;
   long step_count = 0;
   double dt_s = 0;
@@ -83,8 +83,7 @@ class Simulation {
   bool step();
   // Run until done, or until `interrupt` becomes true. `on_sample` is called after each
   // history sample (progress display).
-  void run(const std::atomic<bool>* interrupt = nullptr,
-           const std::function<void(const Simulation&)>& on_sample = {});
+  void run(const std::atomic<bool>* interrupt = nullptr, const std::function<void(const Simulation&)>& on_sample = {});
   // Mark the run interrupted (Ctrl-C) and finish the summary.
   void interrupt(const std::string& why);
 

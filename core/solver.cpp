@@ -38,7 +38,8 @@ class SolverT final : public Solver {
   using V3 = Eigen::Matrix<Real, 3, 1>;
 
   SolverT(const Model& m, int threads)
-      : Solver(m), zener_(ZenerConstants{m.k1 > 0 ? m.k1 : 1, m.k2 > 0 ? m.k2 : 1, m.damping > 0 ? m.damping : 1}, m.dt) {
+      : Solver(m),
+        zener_(ZenerConstants{m.k1 > 0 ? m.k1 : 1, m.k2 > 0 ? m.k2 : 1, m.damping > 0 ? m.damping : 1}, m.dt) {
     const int n = model_.node_count, ne = model_.element_count;
     x_.resize(n);
     v_.resize(n);
@@ -106,26 +107,40 @@ class SolverT final : public Solver {
 
   void step() override {
     if (!divergence_.empty()) return;
-    internal_forces();   // Eq 3, 23: element stress from strain; bending; failure
-    close_ledger_row();  // ledger at t - dt/2
-    integrate();         // Eq 1-2
+    internal_forces();                              // Eq 3, 23: element stress from strain; bending; failure
+    close_ledger_row();                             // ledger at t - dt/2
+    integrate();                                    // Eq 1-2
     projectile_contact();                           // Eq 18-22
     if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
     if (!model_.crossings.empty() && steps_ % kPenetrationCheckEvery == 0) residual_penetration();
     finish_step();
   }
 
-  Vec3d projectile_position() const override { return xp_.template cast<double>(); }
-  Vec3d projectile_velocity() const override { return vp_.template cast<double>(); }
-  Vec3d position(int i) const override { return x_[i].template cast<double>(); }
-  Vec3d velocity(int i) const override { return v_[i].template cast<double>(); }
-  void set_velocity(int i, const Vec3d& v) override { v_[i] = v.cast<Real>(); }
-  void set_position(int i, const Vec3d& x) override { x_[i] = x.cast<Real>(); }
+  Vec3d projectile_position() const override {
+    return xp_.template cast<double>();
+  }
+  Vec3d projectile_velocity() const override {
+    return vp_.template cast<double>();
+  }
+  Vec3d position(int i) const override {
+    return x_[i].template cast<double>();
+  }
+  Vec3d velocity(int i) const override {
+    return v_[i].template cast<double>();
+  }
+  void set_velocity(int i, const Vec3d& v) override {
+    v_[i] = v.cast<Real>();
+  }
+  void set_position(int i, const Vec3d& x) override {
+    x_[i] = x.cast<Real>();
+  }
   void set_projectile_velocity(const Vec3d& v) override {
     vp_ = v.cast<Real>();
     ke_half_ = fabric_ke() + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
   }
-  void set_projectile_position(const Vec3d& x) override { xp_ = x.cast<Real>(); }
+  void set_projectile_position(const Vec3d& x) override {
+    xp_ = x.cast<Real>();
+  }
   void set_external_force(int node, const Vec3d& f) override {
     for (auto& e : f_ext_)
       if (e.first == node) {
@@ -134,17 +149,39 @@ class SolverT final : public Solver {
       }
     f_ext_.push_back({node, f.cast<Real>()});
   }
-  double strain(int e) const override { return double(strain_[e]); }
-  double stress(int e) const override { return double(stress_[e]); }
-  bool broken(int e) const override { return broken_flag_[e] != 0; }
-  bool crossing_active(int c) const override { return cr_active_[c] != 0; }
-  bool crossing_sliding(int c) const override { return cr_sliding_[c] != 0; }
-  double crossing_normal_force(int c) const override { return cr_fn_[c]; }
-  double crossing_friction_force(int c) const override { return cr_ft_[c]; }
-  double crossing_slip_rate(int c) const override { return cr_slip_[c]; }
-  double crossing_gap(int c) const override { return cr_gap_[c]; }
-  int crossing_warp_node(int c) const override { return cr_kw_[c]; }
-  int crossing_weft_node(int c) const override { return cr_kf_[c]; }
+  double strain(int e) const override {
+    return double(strain_[e]);
+  }
+  double stress(int e) const override {
+    return double(stress_[e]);
+  }
+  bool broken(int e) const override {
+    return broken_flag_[e] != 0;
+  }
+  bool crossing_active(int c) const override {
+    return cr_active_[c] != 0;
+  }
+  bool crossing_sliding(int c) const override {
+    return cr_sliding_[c] != 0;
+  }
+  double crossing_normal_force(int c) const override {
+    return cr_fn_[c];
+  }
+  double crossing_friction_force(int c) const override {
+    return cr_ft_[c];
+  }
+  double crossing_slip_rate(int c) const override {
+    return cr_slip_[c];
+  }
+  double crossing_gap(int c) const override {
+    return cr_gap_[c];
+  }
+  int crossing_warp_node(int c) const override {
+    return cr_kw_[c];
+  }
+  int crossing_weft_node(int c) const override {
+    return cr_kf_[c];
+  }
 
  protected:
   void hash_into(std::uint64_t& h) const override {
@@ -166,7 +203,7 @@ class SolverT final : public Solver {
     const int n = model_.node_count;
     std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
     for (int e = 0; e < model_.element_count; ++e) {
-      ne[model_.elem_b[e]].push_back({e, Real(1)});   // element force acts on b, -force on a
+      ne[model_.elem_b[e]].push_back({e, Real(1)});  // element force acts on b, -force on a
       ne[model_.elem_a[e]].push_back({e, Real(-1)});
     }
     for (size_t s = 0; s < model_.bend_k.size(); ++s) {
@@ -414,11 +451,15 @@ class SolverT final : public Solver {
   }
 
   // ------------------------------------------------------------ yarn contact (Eq 5-17)
-  int ynode(int yarn, int k) const { return model_.yarn_node(yarn, k); }
+  int ynode(int yarn, int k) const {
+    return model_.yarn_node(yarn, k);
+  }
   bool seg_ok(int yarn, int s) const {
     return s >= 0 && s + 1 < model_.yarn_size(yarn) && !broken_flag_[model_.yarn_elem_offset[yarn] + s];
   }
-  Real seg_len(int yarn, int s) const { return (x_[ynode(yarn, s + 1)] - x_[ynode(yarn, s)]).norm(); }
+  Real seg_len(int yarn, int s) const {
+    return (x_[ynode(yarn, s + 1)] - x_[ynode(yarn, s)]).norm();
+  }
 
   // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
   Real arc_between(int yarn, double u0, double u1) const {
@@ -446,8 +487,10 @@ class SolverT final : public Solver {
         return s + std::clamp(nf, 0.0, 1.0);
       }
       arc += arc >= 0 ? -room : room;
-      if (arc >= 0) ++s, frac = 0;
-      else --s, frac = 1;
+      if (arc >= 0)
+        ++s, frac = 0;
+      else
+        --s, frac = 1;
     }
   }
 
@@ -495,12 +538,12 @@ class SolverT final : public Solver {
   static constexpr double kTieBand = 0.02;
   struct ContactGeom {
     bool ok = false;
-    int sw = 0, sf = 0;        // the first closest pair (for the end-of-yarn tests)
+    int sw = 0, sf = 0;  // the first closest pair (for the end-of-yarn tests)
     Real a = 0, b = 0;
-    V3 d = V3::Zero();         // contact vector warp -> weft (mean over tied pairs)
-    Real dist = 0;             // smallest |d|
-    Real ww[3] = {0, 0, 0};    // weights on warp nodes kw-1, kw, kw+1
-    Real wf[3] = {0, 0, 0};    // weights on weft nodes kf-1, kf, kf+1
+    V3 d = V3::Zero();       // contact vector warp -> weft (mean over tied pairs)
+    Real dist = 0;           // smallest |d|
+    Real ww[3] = {0, 0, 0};  // weights on warp nodes kw-1, kw, kw+1
+    Real wf[3] = {0, 0, 0};  // weights on weft nodes kf-1, kf, kf+1
   };
 
   ContactGeom closest(int c) const {
@@ -598,8 +641,8 @@ class SolverT final : public Solver {
   bool slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
     const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
                         !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
-    const bool at_start = frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) &&
-                          !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
+    const bool at_start =
+        frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) && !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
     if (!at_end && !at_start) return false;
     const V3 t = x_[ynode(yarn, seg + 1)] - x_[ynode(yarn, seg)];
     const Real L = t.norm();
@@ -647,13 +690,13 @@ class SolverT final : public Solver {
   // crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
   // on the order crossings are visited in, nor on the number of threads.
   struct CrossingImpulse {
-    int node[6];      // warp kw-1..kw+1, weft kf-1..kf+1 (-1: none)
-    Real w[6];        // signed weights: -warp, +weft
-    V3 P;             // normal impulse on the weft contact point (Eq 9-11)
-    V3 S;             // position shift (mass-weighted, like P) of penetration left from before the step
-    int fnode[4];     // friction: warp pair, weft pair
+    int node[6];   // warp kw-1..kw+1, weft kf-1..kf+1 (-1: none)
+    Real w[6];     // signed weights: -warp, +weft
+    V3 P;          // normal impulse on the weft contact point (Eq 9-11)
+    V3 S;          // position shift (mass-weighted, like P) of penetration left from before the step
+    int fnode[4];  // friction: warp pair, weft pair
     Real fw[4];
-    V3 F;             // friction impulse on the weft contact point (Eq 15)
+    V3 F;  // friction impulse on the weft contact point (Eq 15)
     bool has_n, has_f, has_s;
   };
 
@@ -793,8 +836,10 @@ class SolverT final : public Solver {
     const V3 tf = x_[ynode(cr.weft_yarn, g.sf + 1)] - x_[ynode(cr.weft_yarn, g.sf)];
     V3 n = tw.cross(tf);
     const Real nn = n.norm();
-    if (nn > Real(1e-20)) n *= Real(cr.side) / nn;
-    else n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+    if (nn > Real(1e-20))
+      n *= Real(cr.side) / nn;
+    else
+      n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
     const Real D = Real(cr.contact_distance);
     const Real dlen = g.d.norm();
     Real delta;
@@ -1075,8 +1120,7 @@ class SolverT final : public Solver {
   enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8 };
   V3 xp_, vp_;
   double ke_half_ = 0, ke_fabric_half_ = 0;
-  double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0,
-         released_prev_ = 0;
+  double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0, released_prev_ = 0;
   double friction_cum_ = 0, pfriction_cum_ = 0, contact_cum_ = 0, external_cum_ = 0;
   std::vector<std::pair<int, V3>> f_ext_;
   double escape_radius2_ = 1;

@@ -35,14 +35,14 @@ namespace ravel {
 
 // Counts of places where the method's assumptions broke (SPEC §4), with the first one.
 struct ContactDiagnostics {
-  long skipped_nodes = 0;        // a nearest pair moved more than one node in one step
-  long ravelled = 0;             // a yarn slipped off the end of its partner: crossing released
-  long passed_through = 0;       // yarns found passed through each other by more than D
-  long lost_segments = 0;        // both adjoining segments broken: crossing released
+  long skipped_nodes = 0;   // a nearest pair moved more than one node in one step
+  long ravelled = 0;        // a yarn slipped off the end of its partner: crossing released
+  long passed_through = 0;  // yarns found passed through each other by more than D
+  long lost_segments = 0;   // both adjoining segments broken: crossing released
   double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
   int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
-  double max_penetration = 0;    // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
-  bool balance_drift = false;    // the energy balance drifted past solver.max_balance_error slowly
+  double max_penetration = 0;  // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
+  bool balance_drift = false;  // the energy balance drifted past solver.max_balance_error slowly
   double balance_drift_time = -1;
 };
 
@@ -89,17 +89,17 @@ class Solver {
   // Crossing state.
   virtual bool crossing_active(int c) const = 0;
   virtual bool crossing_sliding(int c) const = 0;
-  virtual double crossing_normal_force(int c) const = 0;   // N (Eq 11), last step
-  virtual double crossing_friction_force(int c) const = 0; // N, magnitude of the resultant, last step
-  virtual double crossing_slip_rate(int c) const = 0;      // m/s
-  virtual double crossing_gap(int c) const = 0;            // |d| - D after the step (m), <0: penetration
-  virtual int crossing_warp_node(int c) const = 0;         // tracked nearest node along the warp yarn
+  virtual double crossing_normal_force(int c) const = 0;    // N (Eq 11), last step
+  virtual double crossing_friction_force(int c) const = 0;  // N, magnitude of the resultant, last step
+  virtual double crossing_slip_rate(int c) const = 0;       // m/s
+  virtual double crossing_gap(int c) const = 0;             // |d| - D after the step (m), <0: penetration
+  virtual int crossing_warp_node(int c) const = 0;          // tracked nearest node along the warp yarn
   virtual int crossing_weft_node(int c) const = 0;
 
   // Per step scalars.
   int nodes_on_projectile() const { return nodes_on_projectile_; }
-  double projectile_contact_force() const { return projectile_force_; }   // N, modelled part
-  double yarn_contact_force() const { return yarn_force_; }               // N, modelled part
+  double projectile_contact_force() const { return projectile_force_; }  // N, modelled part
+  double yarn_contact_force() const { return yarn_force_; }              // N, modelled part
   double max_strain() const { return max_strain_; }
   int sliding_crossings() const { return sliding_count_; }
   int stuck_crossings() const { return stuck_count_; }

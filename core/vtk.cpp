@@ -71,8 +71,7 @@ const char* vtk_type<std::int64_t>() {
 }
 
 template <typename T>
-void array(std::ostringstream& xml, Appended& app, const char* name, const std::vector<T>& v,
-           int components = 1) {
+void array(std::ostringstream& xml, Appended& app, const char* name, const std::vector<T>& v, int components = 1) {
   xml << "        <DataArray type=\"" << vtk_type<T>() << "\"";
   if (name) xml << " Name=\"" << name << "\"";
   if (components > 1) xml << " NumberOfComponents=\"" << components << "\"";
@@ -177,7 +176,9 @@ bool write_pvd(const std::string& path, const std::vector<PvdEntry>& entries, st
 VtkSeries::VtkSeries(std::string dir, std::string base, bool mirror)
     : dir_(std::move(dir)), base_(std::move(base)), mirror_(mirror) {}
 
-std::string VtkSeries::pvd_path() const { return dir_ + "/" + base_ + ".pvd"; }
+std::string VtkSeries::pvd_path() const {
+  return dir_ + "/" + base_ + ".pvd";
+}
 
 bool VtkSeries::add(const Frame& frame, std::string* error) {
   char name[64];

@@ -17,15 +17,13 @@ namespace ravel {
 
 // Write `frame` as a .vtu. With `mirror`, the modelled quarter / half is mirrored (as
 // the frame's mirror_x / mirror_y say) so the file holds the whole fabric.
-bool write_vtu(const Frame& frame, const std::string& path, bool mirror = true,
-               std::string* error = nullptr);
+bool write_vtu(const Frame& frame, const std::string& path, bool mirror = true, std::string* error = nullptr);
 
 struct PvdEntry {
   double time_s = 0;
   std::string file;  // relative to the .pvd's folder
 };
-bool write_pvd(const std::string& path, const std::vector<PvdEntry>& entries,
-               std::string* error = nullptr);
+bool write_pvd(const std::string& path, const std::vector<PvdEntry>& entries, std::string* error = nullptr);
 
 // A time series in a folder: <dir>/<base>_00000.vtu, ... and <dir>/<base>.pvd, the .pvd
 // rewritten after every frame so the series is readable while a run is going.

@@ -215,7 +215,7 @@ TEST(Contact, InterpenetrationAfterEachStepIsBounded) {
 // of them break, as in the pin-jointed network (measured on this patch: 13 broken weft
 // yarns at mu = 0.2 and 1, 21 at mu = 3, 25 at mu = 10, 43 pin-jointed).
 TEST(Friction, VeryLargeMuSticksAndApproachesPinJointed) {
-  const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
+  const std::vector<std::string> base{"fabric.width_mm=36",  "fabric.length_mm=36",         "projectile.diameter_mm=6",
                                       "projectile.mass_g=2", "projectile.velocity_mps=200", "solver.end_time_us=150"};
   auto count = [&](const char* mu, long& sliding, long& stuck) {
     Simulation sim(test::scene_with(base + std::vector<std::string>{mu}));

@@ -11,8 +11,8 @@ namespace {
 using test::operator+;
 
 std::vector<std::string> elastic_no_loss() {
-  return {"yarn.material=elastic", "yarn.modulus_pa=7.28e10", "yarn.breakable=false", "yarn.friction=0",
-          "projectile.friction=0", "output.history_interval_us=0.1"};
+  return {"yarn.material=elastic", "yarn.modulus_pa=7.28e10", "yarn.breakable=false",
+          "yarn.friction=0",       "projectile.friction=0",   "output.history_interval_us=0.1"};
 }
 
 // Elastic yarns, no failure, no friction: the only losses are the contact corrections,
@@ -22,8 +22,9 @@ std::vector<std::string> elastic_no_loss() {
 // dt_factor 0.5 by the time the projectile is turned back.
 TEST(Energy, LedgerBalancesThroughImpactAndRebound) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-    Scene sc = test::scene_with(test::small_patch() + elastic_no_loss() +
-                                std::vector<std::string>{model, "projectile.velocity_mps=40", "solver.end_time_us=400"});
+    Scene sc =
+        test::scene_with(test::small_patch() + elastic_no_loss() +
+                         std::vector<std::string>{model, "projectile.velocity_mps=40", "solver.end_time_us=400"});
     Simulation sim(sc);
     sim.run();
     const Summary s = sim.summary();
@@ -73,9 +74,9 @@ TEST(Energy, LedgerBalancesWithViscosityFrictionAndFailure) {
 // them, so their total linear momentum stays what the projectile brought (to rounding).
 TEST(Momentum, ConservedForAFreeFabric) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-    Scene sc = test::scene_with(test::small_patch() + std::vector<std::string>{
-                                                          model, "fabric.clamped=none", "solver.symmetry=full",
-                                                          "projectile.velocity_mps=200", "solver.end_time_us=30"});
+    Scene sc = test::scene_with(test::small_patch() +
+                                std::vector<std::string>{model, "fabric.clamped=none", "solver.symmetry=full",
+                                                         "projectile.velocity_mps=200", "solver.end_time_us=30"});
     Simulation sim(sc);
     const Solver& s = sim.solver();
     const Model& m = s.model();
@@ -95,32 +96,31 @@ TEST(Momentum, ConservedForAFreeFabric) {
 // a node with the mirrored position (to a tolerance that allows the Gauss-Seidel contact
 // order to differ between the halves).
 TEST(Symmetry, FullModelOfSymmetricSceneStaysSymmetric) {
- for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-  SCOPED_TRACE(model);
-  Scene sc = test::scene_with(test::small_patch() + std::vector<std::string>{model,
-                                                                             "solver.symmetry=full",
-                                                                             "projectile.velocity_mps=200"});
-  Simulation sim(sc);
-  test::run_until(sim, 15e-6);
-  const Solver& s = sim.solver();
-  const Model& m = s.model();
-  double worst = 0, scale = 0;
-  for (int i = 0; i < m.node_count; ++i) {
-    const Vec3d x0 = m.x0[i];
-    // Find the node whose initial position is the mirror image in x.
-    for (int j = 0; j < m.node_count; ++j) {
-      if (std::abs(m.x0[j].x() + x0.x()) < 1e-12 && std::abs(m.x0[j].y() - x0.y()) < 1e-12 &&
-          std::abs(m.x0[j].z() - x0.z()) < 1e-12) {
-        const Vec3d a = s.position(i), b = s.position(j);
-        worst = std::max(worst, (Vec3d(-b.x(), b.y(), b.z()) - a).norm());
-        scale = std::max(scale, (a - x0).norm());
-        break;
+  for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
+    SCOPED_TRACE(model);
+    Scene sc = test::scene_with(test::small_patch() +
+                                std::vector<std::string>{model, "solver.symmetry=full", "projectile.velocity_mps=200"});
+    Simulation sim(sc);
+    test::run_until(sim, 15e-6);
+    const Solver& s = sim.solver();
+    const Model& m = s.model();
+    double worst = 0, scale = 0;
+    for (int i = 0; i < m.node_count; ++i) {
+      const Vec3d x0 = m.x0[i];
+      // Find the node whose initial position is the mirror image in x.
+      for (int j = 0; j < m.node_count; ++j) {
+        if (std::abs(m.x0[j].x() + x0.x()) < 1e-12 && std::abs(m.x0[j].y() - x0.y()) < 1e-12 &&
+            std::abs(m.x0[j].z() - x0.z()) < 1e-12) {
+          const Vec3d a = s.position(i), b = s.position(j);
+          worst = std::max(worst, (Vec3d(-b.x(), b.y(), b.z()) - a).norm());
+          scale = std::max(scale, (a - x0).norm());
+          break;
+        }
       }
     }
+    EXPECT_GT(scale, 1e-4);
+    EXPECT_LT(worst, 1e-9 * std::max(scale, 1e-3) + 1e-12);
   }
-  EXPECT_GT(scale, 1e-4);
-  EXPECT_LT(worst, 1e-9 * std::max(scale, 1e-3) + 1e-12);
- }
 }
 
 }  // namespace

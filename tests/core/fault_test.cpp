@@ -41,7 +41,8 @@ void expect_fault(const Simulation& sim, const nlohmann::json& j, const std::str
   EXPECT_LE(s.divergence_step, s.step_count);
   EXPECT_NEAR(s.divergence_time_s, double(s.divergence_step) * s.dt_s, 1e-9 * s.dt_s * double(s.divergence_step + 1));
   char head[96];
-  std::snprintf(head, sizeof head, "diverged at step %ld (t = %.4g us): ", s.divergence_step, s.divergence_time_s * 1e6);
+  std::snprintf(head, sizeof head, "diverged at step %ld (t = %.4g us): ", s.divergence_step,
+                s.divergence_time_s * 1e6);
   EXPECT_EQ(s.diagnosis.rfind(head, 0), 0u) << s.diagnosis;
   EXPECT_NE(s.diagnosis.find("solver.dt_factor"), std::string::npos) << s.diagnosis;  // says what to change
   EXPECT_EQ(j["status"], "diverged");
@@ -52,7 +53,9 @@ void expect_fault(const Simulation& sim, const nlohmann::json& j, const std::str
   EXPECT_EQ(j["diagnosis"], s.diagnosis);
 }
 
-Scene patch(std::vector<std::string> extra = {}) { return test::scene_with(test::small_patch() + extra); }
+Scene patch(std::vector<std::string> extra = {}) {
+  return test::scene_with(test::small_patch() + extra);
+}
 
 TEST(Fault, NanInTheStateStopsTheRunAtTheNextStep) {
   Simulation sim(patch());
@@ -80,7 +83,8 @@ TEST(Fault, ProjectileLeavingTheDomain) {
   // projectile flies off; the scene warns beforehand.
   const Scene sc = patch({"projectile.velocity_mps=2e5"});
   bool warned = false;
-  for (const auto& w : sc.warnings) warned |= w.find("mm per time step, more than the fabric thickness") != std::string::npos;
+  for (const auto& w : sc.warnings)
+    warned |= w.find("mm per time step, more than the fabric thickness") != std::string::npos;
   EXPECT_TRUE(warned);
   Simulation sim(sc);
   const auto j = run_and_read(sim, "left");
@@ -127,7 +131,8 @@ TEST(Fault, SearchLostThresholdIsASceneKey) {
   EXPECT_EQ(s.divergence_cause, "energy_balance") << s.diagnosis;
   EXPECT_GT(s.divergence_step, 11);
   bool warned = false;
-  for (const auto& w : s.warnings) warned |= w.find("nearest-pair search: yarns slid more than one node") != std::string::npos;
+  for (const auto& w : s.warnings)
+    warned |= w.find("nearest-pair search: yarns slid more than one node") != std::string::npos;
   EXPECT_TRUE(warned);
 }
 

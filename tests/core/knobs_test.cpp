@@ -41,9 +41,9 @@ TEST(Determinism, SameSceneSameStateHash) {
 TEST(Stability, SingleYarnBoundaryWhereTheoryPutsIt) {
   char mass[64];
   std::snprintf(mass, sizeof mass, "fabric.node_mass_g=%.9g", 1440 * 7.64e-8 * 0.844e-3 * 1e3);
-  const std::vector<std::string> yarn{"fabric.weave=single_yarn", "fabric.length_mm=100", "yarn.material=elastic",
-                                      "yarn.breakable=false", "projectile.mass_g=1000", "projectile.friction=0",
-                                      "projectile.velocity_mps=100", "solver.end_time_us=40", mass};
+  const std::vector<std::string> yarn{"fabric.weave=single_yarn",    "fabric.length_mm=100",   "yarn.material=elastic",
+                                      "yarn.breakable=false",        "projectile.mass_g=1000", "projectile.friction=0",
+                                      "projectile.velocity_mps=100", "solver.end_time_us=40",  mass};
   const Summary below = test::simulate(test::scene_with(yarn + std::vector<std::string>{"solver.dt_factor=0.98"}));
   const Summary above = test::simulate(test::scene_with(yarn + std::vector<std::string>{"solver.dt_factor=1.05"}));
   EXPECT_EQ(below.status, RunStatus::completed) << below.diagnosis;

@@ -17,7 +17,7 @@ const ZenerConstants kTwaron{7.28e10, 4.17e11, 6.26e8};  // the paper's fit (§5
 class ZenerConstantRate : public ::testing::TestWithParam<double> {};
 
 TEST_P(ZenerConstantRate, StressFollowsEq24) {
-  const double rate = GetParam();       // 1/s
+  const double rate = GetParam();  // 1/s
   const double eps_end = 0.05;
   const int steps = 2000;
   const double dt = eps_end / rate / steps;

@@ -51,8 +51,8 @@ TEST(Scene, OverridesUseTheFilesUnits) {
 }
 
 TEST(Scene, RoundTripsThroughToml) {
-  Scene a = load_scene(default_scene_path(), {"yarn.friction=0.37", "fabric.clamped=left,top", "solver.model=pin_jointed",
-                                              "projectile.shape=cylinder"});
+  Scene a = load_scene(default_scene_path(), {"yarn.friction=0.37", "fabric.clamped=left,top",
+                                              "solver.model=pin_jointed", "projectile.shape=cylinder"});
   Scene b = parse_scene(scene_to_toml(a), "round.toml");
   EXPECT_EQ(scene_to_toml(a), scene_to_toml(b));
   EXPECT_DOUBLE_EQ(b.yarn.friction, 0.37);

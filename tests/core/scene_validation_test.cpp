@@ -56,21 +56,26 @@ TEST(SceneValidation, ProjectileLargerThanTheFabricHasItsOwnMessage) {
 
 TEST(SceneValidation, ValuesThatLookLikeAnotherUnit) {
   // Refused values say which unit they look like.
-  EXPECT_HAS(error_of("", {"fabric.spacing_mm=0.000844"}),
-             "fabric.spacing_mm: more than 4000 yarns per direction (142180); this would not fit in memory; it looks like a "
-             "value in m (0.000844 m = 0.844 mm; the key is in mm)");
-  EXPECT_HAS(error_of("", {"yarn.failure_strain=5.2"}), "must be <= 1, got 5.2; it looks like a value in % (5.2 % = 0.052");
+  EXPECT_HAS(
+      error_of("", {"fabric.spacing_mm=0.000844"}),
+      "fabric.spacing_mm: more than 4000 yarns per direction (142180); this would not fit in memory; it looks like a "
+      "value in m (0.000844 m = 0.844 mm; the key is in mm)");
+  EXPECT_HAS(error_of("", {"yarn.failure_strain=5.2"}),
+             "must be <= 1, got 5.2; it looks like a value in % (5.2 % = 0.052");
   EXPECT_HAS(error_of("", {"solver.end_time_us=3e5"}), "must be <= 100000, got 300000 us; it looks like a value in ns");
   // The mass check blames the value that looks wrong, not the node mass.
-  EXPECT_HAS(error_of("[yarn]\ndensity_kg_m3 = 1.44\n"),
-             "test.toml:2: yarn.density_kg_m3: node mass 9.4e-05 g is inconsistent with density x area x element length = "
-             "9.54e-08 g (more than 3x apart); it looks like a value in g/cm^3");
+  EXPECT_HAS(
+      error_of("[yarn]\ndensity_kg_m3 = 1.44\n"),
+      "test.toml:2: yarn.density_kg_m3: node mass 9.4e-05 g is inconsistent with density x area x element length = "
+      "9.54e-08 g (more than 3x apart); it looks like a value in g/cm^3");
   EXPECT_HAS(error_of("", {"fabric.node_mass_g=9.4e-8"}), "fabric.node_mass_g: node mass 9.4e-08 g is inconsistent");
   EXPECT_HAS(error_of("", {"fabric.node_mass_g=9.4e-8"}), "it looks like a value in kg (the key is in g)");
   // Allowed values that look like another unit warn.
   auto w = warnings_of("", {"projectile.mass_g=0.007"});
   ASSERT_EQ(w.size(), 1u);
-  EXPECT_HAS(w[0], "projectile.mass_g = 0.007 g is far outside the usual 0.05 .. 100000 g; it looks like a value in kg (0.007 kg = 7 g");
+  EXPECT_HAS(w[0],
+             "projectile.mass_g = 0.007 g is far outside the usual 0.05 .. 100000 g; it looks like a value in kg "
+             "(0.007 kg = 7 g");
   EXPECT_TRUE(any_has(warnings_of("", {"projectile.velocity_mps=0.26"}), "looks like a value in km/s"));
   EXPECT_TRUE(any_has(warnings_of("", {"yarn.area_m2=0.0764", "fabric.node_mass_g=94"}), "yarn.area_m2"));
   // Ordinary values do not.
@@ -80,10 +85,10 @@ TEST(SceneValidation, ValuesThatLookLikeAnotherUnit) {
 TEST(SceneValidation, NodeMassToleranceIs25PercentWarningAndFactor3Error) {
   // rho A sqrt(L0^2 + L1^2) = 1440 x 7.64e-8 x 0.867e-3 = 9.54e-8 kg for the default scene.
   EXPECT_TRUE(warnings_of("", {"fabric.node_mass_g=1.15e-4"}).empty());  // +21 %
-  auto w = warnings_of("", {"fabric.node_mass_g=1.25e-4"});                // +31 %
+  auto w = warnings_of("", {"fabric.node_mass_g=1.25e-4"});              // +31 %
   ASSERT_EQ(w.size(), 1u);
   EXPECT_HAS(w[0], "fabric.node_mass_g differs from density x area x element length by 31 % (tolerance 25 %)");
-  EXPECT_EQ(error_of("", {"fabric.node_mass_g=2.8e-4"}), "");              // 2.9x: warned, allowed
+  EXPECT_EQ(error_of("", {"fabric.node_mass_g=2.8e-4"}), "");  // 2.9x: warned, allowed
   EXPECT_HAS(error_of("", {"fabric.node_mass_g=2.9e-4"}), "more than 3x apart");
   EXPECT_HAS(error_of("", {"fabric.node_mass_g=3.0e-5"}), "more than 3x apart");
 }
@@ -99,14 +104,16 @@ TEST(SceneValidation, FailureStrainBeyondTheMaterialModel) {
 
 TEST(SceneValidation, RunsNoMachineFinishesAreRefused) {
   // k1 given in GPa: the wave speed is 0.2 m/s, one step is longer than the run.
-  EXPECT_HAS(error_of("[yarn]\nk1_pa = 72.8\n"),
-             "test.toml:2: yarn.k1_pa: one time step (dt = alpha L0 / c = 1.88e+03 us, wave speed c = 0.225 m/s) is longer "
-             "than the run (solver.end_time_us = 150)");
+  EXPECT_HAS(
+      error_of("[yarn]\nk1_pa = 72.8\n"),
+      "test.toml:2: yarn.k1_pa: one time step (dt = alpha L0 / c = 1.88e+03 us, wave speed c = 0.225 m/s) is longer "
+      "than the run (solver.end_time_us = 150)");
   EXPECT_HAS(error_of("[yarn]\nk1_pa = 72.8\n"), "it looks like a value in GPa");
   // A modulus far too large: billions of steps.
   EXPECT_HAS(error_of("", {"yarn.material=elastic", "yarn.modulus_pa=1e30", "solver.end_time_us=1000"}),
              "yarn.modulus_pa: this scene would need about");
-  EXPECT_TRUE(any_has(warnings_of("", {"solver.end_time_us=1e5", "solver.dt_factor=0.01"}), "time steps; expect it to take long"));
+  EXPECT_TRUE(any_has(warnings_of("", {"solver.end_time_us=1e5", "solver.dt_factor=0.01"}),
+                      "time steps; expect it to take long"));
 }
 
 TEST(SceneValidation, SingleYarnNodeCountIsBounded) {

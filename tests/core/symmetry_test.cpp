@@ -39,8 +39,12 @@ double velocity_at(const std::vector<HistoryRow>& h, double t) {
 
 TEST(Symmetry, QuarterAndFullAgree) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-    const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
-                                        "projectile.mass_g=2", "projectile.velocity_mps=200", "solver.end_time_us=100",
+    const std::vector<std::string> base{"fabric.width_mm=36",
+                                        "fabric.length_mm=36",
+                                        "projectile.diameter_mm=6",
+                                        "projectile.mass_g=2",
+                                        "projectile.velocity_mps=200",
+                                        "solver.end_time_us=100",
                                         model};
     Simulation q(test::scene_with(base));
     Simulation f(test::scene_with(base + std::vector<std::string>{"solver.symmetry=full"}));
@@ -63,8 +67,8 @@ TEST(Symmetry, QuarterAndFullAgree) {
 // a fixed time with elastic, unbreakable yarns.
 TEST(Symmetry, QuarterAndFullLedgersMatchBeforeFailure) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
-    const auto base = test::small_patch() + std::vector<std::string>{model, "yarn.breakable=false",
-                                                                     "projectile.velocity_mps=200"};
+    const auto base =
+        test::small_patch() + std::vector<std::string>{model, "yarn.breakable=false", "projectile.velocity_mps=200"};
     Simulation q(test::scene_with(base));
     Simulation f(test::scene_with(base + std::vector<std::string>{"solver.symmetry=full"}));
     test::run_until(q, 10e-6);

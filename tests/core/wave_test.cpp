@@ -17,9 +17,16 @@ std::vector<std::string> single_yarn(double v) {
   char mass[64], vel[64];
   std::snprintf(mass, sizeof mass, "fabric.node_mass_g=%.9g", kRho * kA * kL0 * 1e3);
   std::snprintf(vel, sizeof vel, "projectile.velocity_mps=%g", v);
-  return {"fabric.weave=single_yarn", "fabric.length_mm=300", "yarn.material=elastic", "yarn.modulus_pa=7.28e10",
-          "yarn.breakable=false", "projectile.mass_g=1000", "projectile.friction=0", "solver.end_time_us=20",
-          mass, vel};
+  return {"fabric.weave=single_yarn",
+          "fabric.length_mm=300",
+          "yarn.material=elastic",
+          "yarn.modulus_pa=7.28e10",
+          "yarn.breakable=false",
+          "projectile.mass_g=1000",
+          "projectile.friction=0",
+          "solver.end_time_us=20",
+          mass,
+          vel};
 }
 
 // Smith's relation V = c sqrt(2 eps sqrt(eps (1 + eps)) - eps^2) solved for eps.
