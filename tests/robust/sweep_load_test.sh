@@ -2,10 +2,13 @@
 # Load (issue 8): a 200-case sweep with --jobs 2 on a tiny scene finishes, every case
 # completes, and the process's peak memory does not grow with the number of cases (a
 # 20-case sweep is the baseline). Prints the timings for docs/robustness.md.
-#   sweep_load_test.sh path/to/ravel [cases]
+#   sweep_load_test.sh path/to/ravel [cases] [rss_bound yes|no]
+# (no under ASan/TSan: their allocators keep freed memory in quarantine on purpose, so
+# peak RSS grows with the work done: 257 -> 477 MB measured under ASan.)
 set -u
 ravel="$1"
 cases="${2:-200}"
+rss_bound="${3:-yes}"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fails=0
@@ -41,5 +44,5 @@ run load "$cases"
 echo "sweep load: 20 cases ${small_s}s peak ${small_kb} kB; $cases cases ${wall_s}s peak ${peak_kb} kB" \
      "($(awk -v n="$cases" -v s="$wall_s" 'BEGIN { printf "%.0f", n / s * 3600 }') cases/hour)"
 # Peak memory may not grow with the number of cases: 10x the cases, at most +32 MB.
-[ "$peak_kb" -le $((small_kb + 32768)) ] || bad "peak RSS grew from $small_kb kB (20 cases) to $peak_kb kB ($cases cases)"
+[ "$rss_bound" = no ] || [ "$peak_kb" -le $((small_kb + 32768)) ] || bad "peak RSS grew from $small_kb kB (20 cases) to $peak_kb kB ($cases cases)"
 [ "$fails" -eq 0 ]
