@@ -336,6 +336,9 @@ void SimWorker::loop() {
     const bool may_step = !diverged_ && !sim_->finished() &&
                           (!paused_.load() || steps_requested_.load() > 0);
     if (!may_step) {
+      // Single steps asked of a run that has ended cannot be honoured: drop them, or they
+      // would stay pending (wait_idle never returns) and leak into the next run.
+      if (diverged_ || sim_->finished()) steps_requested_.store(0);
       steps_per_s_ = sim_rate_ = 0;
       if (changed || was_stepping || issued != seen_commands) {
         applied_commands_ = issued;

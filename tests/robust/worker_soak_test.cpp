@@ -141,6 +141,22 @@ TEST(WorkerSoak, RandomEditsWhileStepping) {
               diverged_seen, v.run_id);
 }
 
+TEST(WorkerSoak, SingleStepsOnAnEndedRunAreDropped) {
+  // Found by Memory.StudyInTheBackgroundWhileEditing: a step request on a finished run
+  // stayed pending, so wait_idle never returned.
+  SimWorker w(small_scene({"solver.end_time_us=0.5"}), false);
+  ASSERT_TRUE(w.wait_for_steps(1000000, 20s));
+  ASSERT_TRUE(w.wait_idle(10s));
+  WorkerView v;
+  w.sync(v);
+  ASSERT_EQ(v.state, WorkerState::finished);
+  const long steps = v.step_count;
+  w.step_once(3);
+  ASSERT_TRUE(w.wait_idle(5s));
+  w.sync(v);
+  EXPECT_EQ(v.step_count, steps);
+}
+
 TEST(WorkerSoak, DivergedRunPausesAndTakesNewSettings) {
   SimWorker w(small_scene({"solver.dt_factor=2.2", "yarn.material=elastic"}), false);
   ASSERT_TRUE(w.wait_for_steps(1000000, 60s));
