@@ -114,7 +114,7 @@ constexpr double kMaxSteps = 1e9;
 std::vector<KeyDef> make_defs() {
   std::vector<KeyDef> defs;
   {
-    KeyDef d{"name", "", "scene name, shown in captions and summaries", Type::text};
+    KeyDef d{"name", "", "scene name, shown in captions and summaries", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.set_text = [](Scene& s, const std::string& v) { s.name = v; };
     d.get_text = [](const Scene& s) { return s.name; };
     defs.push_back(d);
@@ -122,7 +122,7 @@ std::vector<KeyDef> make_defs() {
   {
     KeyDef d{"fabric.weave", "",
              "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)",
-             Type::text};
+             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"plain", "single_yarn"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn;
@@ -142,7 +142,7 @@ std::vector<KeyDef> make_defs() {
   {
     KeyDef d{"fabric.clamped", "",
              "clamped edges: comma list of left,right (x = -W/2, +W/2), bottom,top (y = -L/2, +L/2), or all / none",
-             Type::text};
+             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.set_text = [](Scene& s, const std::string& v) {
       ClampedEdges c{false, false, false, false};
       std::stringstream ss(v);
@@ -171,7 +171,7 @@ std::vector<KeyDef> make_defs() {
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
   {
-    KeyDef d{"yarn.material", "", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", Type::text};
+    KeyDef d{"yarn.material", "", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"zener", "elastic"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.yarn.material = v == "zener" ? Material::zener : Material::elastic;
@@ -192,7 +192,7 @@ std::vector<KeyDef> make_defs() {
       "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0,
       yarn.bending_fraction);
   {
-    KeyDef d{"projectile.shape", "", "sphere, cylinder (flat-faced) or cone", Type::text};
+    KeyDef d{"projectile.shape", "", "sphere, cylinder (flat-faced) or cone", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"sphere", "cylinder", "cone"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.projectile.shape = v == "sphere" ? ShapeKind::sphere : v == "cylinder" ? ShapeKind::cylinder : ShapeKind::cone;
@@ -214,7 +214,7 @@ std::vector<KeyDef> make_defs() {
   {
     KeyDef d{"solver.model", "",
              "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)",
-             Type::text};
+             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"sliding", "pin_jointed"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed;
@@ -232,7 +232,7 @@ std::vector<KeyDef> make_defs() {
   NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0,
       solver.friction_penalty);
   {
-    KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text};
+    KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"auto", "full"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full;
@@ -243,7 +243,7 @@ std::vector<KeyDef> make_defs() {
     defs.push_back(d);
   }
   {
-    KeyDef d{"solver.precision", "", "double or float: floating-point precision of the state", Type::text};
+    KeyDef d{"solver.precision", "", "double or float: floating-point precision of the state", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
     d.choices = {"double", "float"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.precision = v == "double" ? Precision::double_precision : Precision::single_precision;

@@ -703,7 +703,6 @@ class SolverT final : public Solver {
   void yarn_contact() {
     const int nc = int(model_.crossings.size());
     const int N = model_.contact_iterations;
-    const Real dt = Real(model_.dt);
     std::fill(cr_fn_step_.begin(), cr_fn_step_.end(), 0.0);
     std::fill(cr_ft_.begin(), cr_ft_.end(), 0.0);
     std::fill(cr_event_.begin(), cr_event_.end(), 0);

@@ -57,7 +57,9 @@ void expect_consistent(const WorkerView& v) {
   EXPECT_DOUBLE_EQ(v.frame.friction, v.scene.yarn.friction);
   EXPECT_DOUBLE_EQ(v.frame.impact_velocity_mps, v.scene.projectile.velocity_mps);
   for (size_t i = 1; i < v.history.size(); ++i) ASSERT_GT(v.history[i].t_s, v.history[i - 1].t_s);
-  if (!v.history.empty()) EXPECT_LE(v.history.back().t_s, v.frame.time_s + 0.5 * dt);
+  if (!v.history.empty()) {
+    EXPECT_LE(v.history.back().t_s, v.frame.time_s + 0.5 * dt);
+  }
   if (v.state == WorkerState::diverged) {
     // Paused with the run's own diagnosis (cause, step, time), unless the user has since
     // tried an edit that was refused: then the message says why, and the run stays.

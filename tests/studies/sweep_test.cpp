@@ -194,8 +194,9 @@ TEST(Sweep, CaseFoldersAppearWholeOrNotAtAll) {
   SweepHooks hooks;
   hooks.on_simulation = [&](const Case& c, const Simulation&, const std::string& tmp) {
     EXPECT_TRUE(fs::exists(tmp + "/case.json"));
-    if (c.index != 1)  // case 1's incomplete folder was planted above
+    if (c.index != 1) {  // case 1's incomplete folder was planted above
       EXPECT_FALSE(fs::exists(case_dir(dir, c))) << "the final folder exists before the case is complete";
+    }
     if (c.index == 2) throw OutputError("disk full (simulated)");
   };
   const auto rep = run_sweep(cases, cases, cheap_options(dir), kKeys, hooks);
