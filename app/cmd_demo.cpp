@@ -21,8 +21,10 @@ int cmd_demo(const Args& args) {
         std::printf("  %-9s %s\n            %s\n            key frames:", d.name.c_str(), d.title.c_str(),
                     d.summary.c_str());
         for (const auto& k : d.key_frames) {
-          if (k.t_us < 0) std::printf(" end");
-          else std::printf(" %g us", k.t_us);
+          if (k.t_us < 0)
+            std::printf(" end");
+          else
+            std::printf(" %g us", k.t_us);
         }
         std::printf("; runs:");
         for (const auto& r : d.runs) std::printf(" [%s]", r.label.c_str());
@@ -49,11 +51,15 @@ int cmd_demo(const Args& args) {
         throw UsageError("--size: expected WxH of at least 320x240, got '" + a.flags["size"] + "'");
     }
     if (a.threads >= 0) opt.solver_threads = a.threads;
-    if (!has_switch(a, "quiet")) opt.progress = [](const std::string& s) { std::printf("%s\n", s.c_str()); std::fflush(stdout); };
+    if (!has_switch(a, "quiet"))
+      opt.progress = [](const std::string& s) {
+        std::printf("%s\n", s.c_str());
+        std::fflush(stdout);
+      };
 
-    std::vector<const demos::Demo*> todo;
+    std::vector<const demos::Demo*> selected;
     if (a.scene_path == "all") {
-      for (const demos::Demo& d : demos::catalogue(quick)) todo.push_back(&d);
+      for (const demos::Demo& d : demos::catalogue(quick)) selected.push_back(&d);
     } else {
       const demos::Demo* d = demos::find_demo(a.scene_path, quick);
       if (!d) {
@@ -61,10 +67,10 @@ int cmd_demo(const Args& args) {
         for (const demos::Demo& x : demos::catalogue(quick)) names += (names.empty() ? "" : ", ") + x.name;
         throw UsageError("ravel demo: no demo '" + a.scene_path + "' (" + names + ", all; see ravel demo --list)");
       }
-      todo.push_back(d);
+      selected.push_back(d);
     }
-    for (const demos::Demo* d : todo) {
-      const std::string dir = todo.size() > 1 ? (std::filesystem::path(a.out_dir) / d->name).string() : a.out_dir;
+    for (const demos::Demo* d : selected) {
+      const std::string dir = selected.size() > 1 ? (std::filesystem::path(a.out_dir) / d->name).string() : a.out_dir;
       if (opt.progress) opt.progress("demo " + d->name + ": " + d->title + " -> " + dir);
       const demos::DemoResult r = demos::render_demo(*d, dir, opt);
       std::printf("demo %s: %zu key frames, %zu charts in %.0f s; see %s\n", d->name.c_str(), r.images.size(),

@@ -57,8 +57,12 @@ double cpu_seconds(clockid_t clock) {
 }
 
 std::string g_glfw_error;
-void on_glfw_error(int, const char* description) { g_glfw_error = description ? description : "?"; }
-void* glfw_loader(const char* name) { return reinterpret_cast<void*>(glfwGetProcAddress(name)); }
+void on_glfw_error(int, const char* description) {
+  g_glfw_error = description ? description : "?";
+}
+void* glfw_loader(const char* name) {
+  return reinterpret_cast<void*>(glfwGetProcAddress(name));
+}
 
 gui::CompareMode* g_compare = nullptr;  // the Demos menu / Compare runs (one per app)
 
@@ -80,9 +84,9 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
       a.arg = a.action.substr(c2 + 1);
       a.action = a.action.substr(0, c2);
     }
-    static const char* known[] = {"play", "pause", "step", "reset", "restart", "clear", "fast", "slow",
-                                  "set", "view", "field", "screenshot", "export-results", "export-scene",
-                                  "demo", "continue", "compare-exit"};
+    static const char* known[] = {"play",           "pause",        "step", "reset",    "restart",     "clear",
+                                  "fast",           "slow",         "set",  "view",     "field",       "screenshot",
+                                  "export-results", "export-scene", "demo", "continue", "compare-exit"};
     if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return a.action == k; }) ==
         std::end(known))
       throw UsageError("--do: unknown action '" + a.action +
@@ -95,12 +99,18 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
 
 void apply_script_action(GuiApp& app, const ScriptAction& a) {
   SimWorker& w = *app.worker;
-  if (a.action == "play") w.play();
-  else if (a.action == "pause") w.pause();
-  else if (a.action == "step") w.step_once(a.arg.empty() ? 1 : std::max(1, std::atoi(a.arg.c_str())));
-  else if (a.action == "reset") w.reset();
-  else if (a.action == "restart") gui::restart_with_draft(app);
-  else if (a.action == "clear") w.clear_past_runs();
+  if (a.action == "play")
+    w.play();
+  else if (a.action == "pause")
+    w.pause();
+  else if (a.action == "step")
+    w.step_once(a.arg.empty() ? 1 : std::max(1, std::atoi(a.arg.c_str())));
+  else if (a.action == "reset")
+    w.reset();
+  else if (a.action == "restart")
+    gui::restart_with_draft(app);
+  else if (a.action == "clear")
+    w.clear_past_runs();
   else if (a.action == "fast") {
     app.pacing.max_speed = true;
     w.set_pacing(app.pacing);
@@ -193,8 +203,8 @@ void load_font(float size_px) {
 void handle_input(GuiApp& app) {
   const ImGuiIO& io = ImGui::GetIO();
   const ImVec2 m = io.MousePos;
-  const bool in_view = m.x >= app.view_x && m.x < app.view_x + app.view_w && m.y >= app.view_y &&
-                       m.y < app.view_y + app.view_h;
+  const bool in_view =
+      m.x >= app.view_x && m.x < app.view_x + app.view_w && m.y >= app.view_y && m.y < app.view_y + app.view_h;
   if (!io.WantCaptureMouse && in_view) {
     if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) app.camera_needs_fit = true;
     if (io.MouseWheel != 0) app.camera.zoom(std::pow(0.88f, io.MouseWheel));
@@ -232,14 +242,13 @@ void handle_input(GuiApp& app) {
       app.view_options.view = render::ViewPreset(i);
       app.camera_needs_fit = true;
     }
-  if (ImGui::IsKeyPressed(GLFW_KEY_F1, false) || ImGui::IsKeyPressed(GLFW_KEY_H, false))
-    app.show_help = !app.show_help;
+  if (ImGui::IsKeyPressed(GLFW_KEY_F1, false) || ImGui::IsKeyPressed(GLFW_KEY_H, false)) app.show_help = !app.show_help;
 }
 
 void draw_help(GuiApp& app) {
   if (!app.show_help) return;
-  ImGui::SetNextWindowPos(ImVec2(app.view_x + app.view_w * 0.5f, app.view_y + app.view_h * 0.5f),
-                          ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+  ImGui::SetNextWindowPos(ImVec2(app.view_x + app.view_w * 0.5f, app.view_y + app.view_h * 0.5f), ImGuiCond_Always,
+                          ImVec2(0.5f, 0.5f));
   ImGui::Begin("Keys and mouse", &app.show_help,
                ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoMove);
   const char* rows[][2] = {{"Space", "play / pause"},
@@ -286,8 +295,7 @@ class ViewCache {
   }
 
   // Redraw if needed; `force_hq` for screenshots. Returns true if it drew.
-  bool update(render::Renderer& renderer, const GuiApp& app, int w, int h, float ui_scale, bool busy,
-              bool force_hq) {
+  bool update(render::Renderer& renderer, const GuiApp& app, int w, int h, float ui_scale, bool busy, bool force_hq) {
     using Clock = std::chrono::steady_clock;
     const auto now = Clock::now();
     if (w != w_ || h != h_) resize(w, h);
@@ -346,11 +354,10 @@ class ViewCache {
     const render::Camera& c = app.camera;
     const render::ViewOptions& o = app.view_options;
     char b[320];
-    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g", c.target[0],
-                  c.target[1], c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view),
-                  int(o.field), int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut,
-                  o.show_caption, o.show_colorbar, o.range_min, o.range_max, int(o.yarn_geometry),
-                  app.playing_render_scale);
+    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g", c.target[0], c.target[1],
+                  c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view), int(o.field), int(o.map),
+                  o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption, o.show_colorbar,
+                  o.range_min, o.range_max, int(o.yarn_geometry), app.playing_render_scale);
     return b;
   }
 
@@ -400,8 +407,8 @@ std::vector<std::string> shipped_scenes() {
 
 int cmd_gui(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"frames", "screenshot", "do", "pause-at-us", "view", "field", "size", "export-dir"},
-                              {"paused"}, {"do"});
+    CommonArgs a = parse_args(
+        args, {"frames", "screenshot", "do", "pause-at-us", "view", "field", "size", "export-dir"}, {"paused"}, {"do"});
     long frames = -1;
     if (a.flags.count("frames")) {
       char* end = nullptr;
@@ -426,8 +433,8 @@ int cmd_gui(const Args& args) {
     int win_w = 1600, win_h = 1000;
     if (a.flags.count("size")) {
       char x = 0, rest = 0;
-      if (std::sscanf(a.flags["size"].c_str(), "%d%c%d%c", &win_w, &x, &win_h, &rest) != 3 || x != 'x' ||
-          win_w < 640 || win_h < 480 || win_w > 8192 || win_h > 8192)
+      if (std::sscanf(a.flags["size"].c_str(), "%d%c%d%c", &win_w, &x, &win_h, &rest) != 3 || x != 'x' || win_w < 640 ||
+          win_h < 480 || win_w > 8192 || win_h > 8192)
         throw UsageError("--size: expected WxH of at least 640x480, got '" + a.flags["size"] + "'");
     }
     Scene scene = load_scene_from(a);
@@ -505,8 +512,7 @@ int cmd_gui(const Args& args) {
 
       ViewCache view_cache;
       const auto t0 = std::chrono::steady_clock::now();
-      const double ui_cpu0 = cpu_seconds(CLOCK_THREAD_CPUTIME_ID),
-                   process_cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
+      const double ui_cpu0 = cpu_seconds(CLOCK_THREAD_CPUTIME_ID), process_cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
       auto last_frame_end = t0;
       double worst_frame_ms = 0, view_ms_total = 0;
       long frame = 0;
@@ -562,12 +568,11 @@ int cmd_gui(const Args& args) {
           app.camera = render::fitted_camera(app.view.frame, app.view_options.view, float(vw) / float(vh));
           app.camera_needs_fit = false;
         }
-        const bool shot_due = app.screenshot_requested ||
-                              (frames > 0 && frame >= frames && !screenshot.empty());
+        const bool shot_due = app.screenshot_requested || (frames > 0 && frame >= frames && !screenshot.empty());
         const auto v0 = std::chrono::steady_clock::now();
         if (!compare.active())
           view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
-                          shot_due);
+                            shot_due);
         view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
         ImGui::Render();
         glViewport(0, 0, fb_w, fb_h);
@@ -636,9 +641,8 @@ int cmd_gui(const Args& args) {
             "%.1f s; UI thread CPU %.1f ms per frame, process CPU %.0f %% of one core), 3D view drawn "
             "%ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f, "
             "load %.2f\n",
-            frame, wall, double(frame) / wall, worst_frame_ms,
-            playing_s > 0 ? double(playing_frames) / playing_s : 0.0, playing_s, 1e3 * ui_cpu / double(frame),
-            100.0 * process_cpu / wall, view_cache.draws(),
+            frame, wall, double(frame) / wall, worst_frame_ms, playing_s > 0 ? double(playing_frames) / playing_s : 0.0,
+            playing_s, 1e3 * ui_cpu / double(frame), 100.0 * process_cpu / wall, view_cache.draws(),
             view_ms_total / double(std::max(1L, view_cache.draws())), ImGui::GetIO().MetricsRenderVertices,
             sim_at_end_us, app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());

@@ -24,10 +24,14 @@ namespace ravel::app {
 
 namespace {
 std::atomic<bool> g_interrupt{false};
-extern "C" void on_signal(int) { g_interrupt.store(true); }
+extern "C" void on_signal(int) {
+  g_interrupt.store(true);
+}
 }  // namespace
 
-std::atomic<bool>& interrupt_flag() { return g_interrupt; }
+std::atomic<bool>& interrupt_flag() {
+  return g_interrupt;
+}
 
 void install_signal_handlers() {
   std::signal(SIGINT, on_signal);
@@ -45,7 +49,8 @@ void inject_test_fault(Simulation& sim) {
   const auto at = s.find('@');
   const std::string what = s.substr(0, at);
   const long step = at == std::string::npos ? 0 : std::atol(s.c_str() + at + 1);
-  while (sim.step_count() < step && sim.step()) {}
+  while (sim.step_count() < step && sim.step()) {
+  }
   if (sim.finished()) return;
   Solver& solver = sim.solver();
   const Model& m = solver.model();

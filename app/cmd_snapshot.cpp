@@ -27,8 +27,7 @@ std::vector<double> parse_times_us(const std::string& text) {
     char* end = nullptr;
     const double t = std::strtod(item.c_str(), &end);
     if (item.empty() || *end || !std::isfinite(t) || t < 0)
-      throw UsageError("--at: expected times in microseconds >= 0 separated by commas, got '" +
-                       item + "'");
+      throw UsageError("--at: expected times in microseconds >= 0 separated by commas, got '" + item + "'");
     times.push_back(t);
   }
   if (times.empty()) throw UsageError("--at needs at least one time in microseconds");
@@ -40,8 +39,8 @@ std::vector<double> parse_times_us(const std::string& text) {
 void parse_size(const std::string& text, int* w, int* h) {
   char x = 0;
   char rest = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", w, &x, h, &rest) != 3 || (x != 'x' && x != 'X') ||
-      *w < 16 || *h < 16 || *w > 8192 || *h > 8192)
+  if (std::sscanf(text.c_str(), "%d%c%d%c", w, &x, h, &rest) != 3 || (x != 'x' && x != 'X') || *w < 16 || *h < 16 ||
+      *w > 8192 || *h > 8192)
     throw UsageError("--size: expected WxH between 16x16 and 8192x8192, got '" + text + "'");
 }
 
@@ -56,15 +55,12 @@ int cmd_snapshot(const Args& args) {
 
     render::ViewOptions view;
     if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &view.view))
-      throw UsageError("--view: expected oblique, top, back or section, got '" + a.flags["view"] +
-                       "'");
+      throw UsageError("--view: expected oblique, top, back or section, got '" + a.flags["view"] + "'");
     if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &view.field))
-      throw UsageError("--field: expected strain, velocity or sliding, got '" + a.flags["field"] +
-                       "'");
+      throw UsageError("--field: expected strain, velocity or sliding, got '" + a.flags["field"] + "'");
     if (a.flags.count("range")) {
       char colon = 0;
-      if (std::sscanf(a.flags["range"].c_str(), "%f%c%f", &view.range_min, &colon,
-                      &view.range_max) != 3 ||
+      if (std::sscanf(a.flags["range"].c_str(), "%f%c%f", &view.range_min, &colon, &view.range_max) != 3 ||
           colon != ':' || !(view.range_max > view.range_min))
         throw UsageError("--range: expected LO:HI with LO < HI, got '" + a.flags["range"] + "'");
     }
@@ -94,11 +90,9 @@ int cmd_snapshot(const Args& args) {
                      "that final state\n",
                      sim.time_s() * 1e6, to_string(sim.summary().end_reason), t_us);
       char name[256];
-      std::snprintf(name, sizeof name, "%s_%s_t%07.2fus.png", scene.name.c_str(),
-                    render::to_string(view.view), t_us);
+      std::snprintf(name, sizeof name, "%s_%s_t%07.2fus.png", scene.name.c_str(), render::to_string(view.view), t_us);
       const std::string path = a.out_dir + "/" + name;
-      if (!renderer->render_png(frame, view, width, height, path, &error))
-        throw OutputError(path + ": " + error);
+      if (!renderer->render_png(frame, view, width, height, path, &error)) throw OutputError(path + ": " + error);
       ++written;
       if (!quiet) std::printf("%s  (t = %.2f us)\n", path.c_str(), frame.time_s * 1e6);
     }

@@ -81,14 +81,17 @@ void check_out_dir(const std::string& dir) {
     throw OutputError("--out " + dir + ": cannot create it (" + parent.string() + " is not writable)");
 }
 
-bool progress_wanted(const CommonArgs& a) { return !has_switch(a, "quiet"); }
+bool progress_wanted(const CommonArgs& a) {
+  return !has_switch(a, "quiet");
+}
 
 }  // namespace
 
 int cmd_sweep(const Args& args) {
   try {
     CommonArgs a = parse_args(args, {"vary", "jobs", "shard"}, {"quiet"}, {"vary"});
-    if (!a.multi.count("vary")) throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
+    if (!a.multi.count("vary"))
+      throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
     check_out_dir(a.out_dir);
     studies::SweepOptions opt;
     opt.scene_path = resolved_scene_path(a);
@@ -136,8 +139,8 @@ int cmd_sweep(const Args& args) {
                 rep.cases_per_hour);
     std::printf("  %s/results.csv\n", opt.out_dir.c_str());
     // Charts of what is finished so far (all shards), with their CSVs.
-    const auto charts = studies::sweep_charts(
-        studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), keys);
+    const auto charts =
+        studies::sweep_charts(studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), keys);
     if (!charts.empty()) prepare_output_dir(opt.out_dir + "/charts");
     for (const auto& [stem, chart] : charts) {
       if (studies::finite_point_count(chart) == 0) continue;
@@ -204,7 +207,8 @@ int cmd_limit(const Args& args) {
     c.y = {"residual velocity", "m/s"};
     studies::Series runs{"runs", {}, {}, studies::SeriesStyle::markers};
     auto sorted = r.runs;
-    std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
+    std::sort(sorted.begin(), sorted.end(),
+              [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
     for (const auto& s : sorted) {
       if (s.failed) continue;  // a diverged run has no outcome to show
       runs.x.push_back(s.velocity_mps);
@@ -275,8 +279,10 @@ int cmd_paper(const Args& args) {
       std::lock_guard<std::mutex> lock(mu);
       if (stage != last_stage && !last_stage.empty() && !isatty(fileno(stderr))) std::fprintf(stderr, "\n");
       last_stage = stage;
-      if (isatty(fileno(stderr))) std::fprintf(stderr, "\r  %s: %d/%d   ", stage.c_str(), done, total);
-      else if (done == total || done % 10 == 0) std::fprintf(stderr, "  %s: %d/%d\n", stage.c_str(), done, total);
+      if (isatty(fileno(stderr)))
+        std::fprintf(stderr, "\r  %s: %d/%d   ", stage.c_str(), done, total);
+      else if (done == total || done % 10 == 0)
+        std::fprintf(stderr, "  %s: %d/%d\n", stage.c_str(), done, total);
     };
     install_signal_handlers();
     if (verbose)

@@ -69,8 +69,9 @@ void progress_line(bool verbose, const std::string& s) {
 
 int cmd_tradeoff(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance", "reference"},
-                              {"quick", "limit", "quiet"}, {"knob", "reference"});
+    CommonArgs a =
+        parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance", "reference"},
+                   {"quick", "limit", "quiet"}, {"knob", "reference"});
     if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
     studies::TradeoffOptions opt;
     opt.scene_path = scene_file(a);
@@ -84,7 +85,8 @@ int cmd_tradeoff(const Args& args) {
       // --knob KEY=v1,v2: replaces that knob's list (checked like --vary).
       const auto v = studies::parse_vary(k, opt.scene_path, opt.overrides);
       if (!studies::is_tradeoff_knob(v.key))
-        throw UsageError("--knob " + v.key + ": not a speed/accuracy knob (solver.dt_factor, solver.contact_iterations, "
+        throw UsageError("--knob " + v.key +
+                         ": not a speed/accuracy knob (solver.dt_factor, solver.contact_iterations, "
                          "solver.precision, solver.model, solver.symmetry, fabric.yarns_per_element)");
       for (auto& kn : opt.knobs)
         if (kn.key == v.key) kn.values = v.values;
@@ -133,7 +135,8 @@ int cmd_tradeoff(const Args& args) {
     write_file_atomic(opt.out_dir + "/tradeoff.csv", studies::tradeoff_csv(r));
     write_file_atomic(opt.out_dir + "/tradeoff.json", studies::tradeoff_json(r, opt));
     write_file_atomic(opt.out_dir + "/tradeoff.md", studies::tradeoff_markdown(r, opt));
-    for (const auto& [stem, chart] : studies::tradeoff_charts(r, opt)) studies::write_chart(chart, opt.out_dir + "/" + stem);
+    for (const auto& [stem, chart] : studies::tradeoff_charts(r, opt))
+      studies::write_chart(chart, opt.out_dir + "/" + stem);
     // The verdict.
     std::printf("tradeoff: %d runs (%d already finished) in %.0f s\n", r.runs, r.runs_skipped, r.wall_time_s);
     if (!r.rows.empty())

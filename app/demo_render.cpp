@@ -15,8 +15,12 @@ namespace fs = std::filesystem;
 
 // Colours no colour map of the renderer uses (turbo, viridis), so the lines can be found
 // on the image: magenta and white.
-render::Vec3 longitudinal_color() { return {1.0f, 0.3f, 0.95f}; }
-render::Vec3 transverse_color() { return {1.0f, 1.0f, 1.0f}; }
+render::Vec3 longitudinal_color() {
+  return {1.0f, 0.3f, 0.95f};
+}
+render::Vec3 transverse_color() {
+  return {1.0f, 1.0f, 1.0f};
+}
 
 ImageLayout layout_image(int w, int h, const std::vector<Frame>& first_frames, render::ViewPreset view, bool chart) {
   ImageLayout L;
@@ -161,8 +165,10 @@ bool has_chart(const Demo& demo, DemoChart c) {
 
 std::string time_tag(double t_us) {
   char b[32];
-  if (std::abs(t_us - std::round(t_us)) < 0.05) std::snprintf(b, sizeof b, "%.0fus", t_us);
-  else std::snprintf(b, sizeof b, "%.1fus", t_us);
+  if (std::abs(t_us - std::round(t_us)) < 0.05)
+    std::snprintf(b, sizeof b, "%.0fus", t_us);
+  else
+    std::snprintf(b, sizeof b, "%.1fus", t_us);
   return b;
 }
 
@@ -179,8 +185,9 @@ std::vector<std::uint8_t> compose_key_frame(render::HeadlessRenderer& hr, render
   bg.show_fabric = bg.show_projectile = bg.show_clamps = bg.show_caption = bg.show_colorbar = false;
   bg.background_top = {0.13f, 0.15f, 0.19f};
   bg.background_bottom = {0.06f, 0.07f, 0.09f};
-  if (!runs.empty()) hr.renderer().draw(runs[0].frame, L.viewports.empty() ? render::Camera{} : L.viewports[0].camera, bg,
-                                        0, 0, L.width, L.height);
+  if (!runs.empty())
+    hr.renderer().draw(runs[0].frame, L.viewports.empty() ? render::Camera{} : L.viewports[0].camera, bg, 0, 0, L.width,
+                       L.height);
   const render::ViewOptions o = demo_view_options(demo, L);
   for (std::size_t i = 0; i < runs.size() && i < L.viewports.size(); ++i) {
     const ViewportLayout& v = L.viewports[i];
@@ -258,8 +265,10 @@ DemoResult render_demo(const Demo& demo, const std::string& out_dir, const DemoR
   for (std::size_t k = 0; k < demo.key_frames.size(); ++k) {
     const KeyFrame& key = demo.key_frames[k];
     const auto w0 = std::chrono::steady_clock::now();
-    if (key.t_us < 0) runner.run_to_end();
-    else runner.advance_to(key.t_us * 1e-6);
+    if (key.t_us < 0)
+      runner.run_to_end();
+    else
+      runner.advance_to(key.t_us * 1e-6);
     DemoImage img;
     img.runs = runner.state();
     double t_show = 0;
@@ -290,7 +299,8 @@ DemoResult render_demo(const Demo& demo, const std::string& out_dir, const DemoR
     say("  wrote " + img.path);
   }
   for (DemoChart c : demo.charts) {
-    const std::string stem = (fs::path(out_dir) / (demo.name + (c == DemoChart::velocity_history ? "_velocity" : "_broken"))).string();
+    const std::string stem =
+        (fs::path(out_dir) / (demo.name + (c == DemoChart::velocity_history ? "_velocity" : "_broken"))).string();
     studies::write_chart(c == DemoChart::velocity_history ? velocity_chart(demo, final_state, t_end_us)
                                                           : broken_chart(demo, final_state),
                          stem);
@@ -314,7 +324,8 @@ DemoResult render_demo(const Demo& demo, const std::string& out_dir, const DemoR
     md += b;
   }
   md += "\n- Note: " + demo.note + "\n";
-  if (opt.quick) md += "- **Quick mode** (tests): a 50 x 50 mm ply and short runs; the pictures check the tool, not the physics.\n";
+  if (opt.quick)
+    md += "- **Quick mode** (tests): a 50 x 50 mm ply and short runs; the pictures check the tool, not the physics.\n";
   char b[128];
   std::snprintf(b, sizeof b, "- Made with `ravel demo %s%s` in %.0f s.\n\n## Key frames\n\n", demo.name.c_str(),
                 opt.quick ? " --quick" : "", result.wall_time_s);

@@ -55,8 +55,8 @@ std::vector<std::uint8_t> compose_key_frame(render::HeadlessRenderer& hr, render
                                             double chart_x_max_us);
 
 struct DemoImage {
-  std::string path;        // DIR/NN_<name>_<t>us.png
-  double t_us = 0;         // the time shown (the slowest run's)
+  std::string path;  // DIR/NN_<name>_<t>us.png
+  double t_us = 0;   // the time shown (the slowest run's)
   std::vector<std::string> caption;
   std::vector<RunState> runs;  // the state drawn
   ImageLayout layout;

@@ -48,8 +48,10 @@ MeasuredFronts measure_fronts(const Scene& scene, const Frame& frame) {
     const auto& v = frame.node_vel[i];
     const double dx = std::abs(p[0] - cx), dy = std::abs(p[1] - cy);
     double d = -1;
-    if (dy < band) d = dx;
-    else if (dx < band) d = dy;
+    if (dy < band)
+      d = dx;
+    else if (dx < band)
+      d = dy;
     if (d < 0) continue;
     const double speed = std::sqrt(double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2]);
     if (speed > 0.25 * inflow) m.longitudinal_m = std::max(m.longitudinal_m, d);
@@ -86,7 +88,8 @@ std::vector<Demo> build(bool quick) {
     Demo d;
     d.name = "waves";
     d.title = "1. Waves";
-    d.summary = "longitudinal and transverse wave fronts spreading from the impact point, with theory drawn over the fabric";
+    d.summary =
+        "longitudinal and transverse wave fronts spreading from the impact point, with theory drawn over the fabric";
     d.runs = {{"260 m/s, mu = 0.2", {}}};
     d.overrides = {"projectile.velocity_mps=260"};
     d.view = "top";
@@ -97,22 +100,32 @@ std::vector<Demo> build(bool quick) {
     if (!quick) {
       d.end_time_us = 36;
       d.key_frames = {
-          {2, "Impact. A longitudinal (stretch) wave runs out along the yarns at c = sqrt(E/rho) = {c} m/s: theory {wL} mm",
+          {2,
+           "Impact. A longitudinal (stretch) wave runs out along the yarns at c = sqrt(E/rho) = {c} m/s: theory {wL} "
+           "mm",
            "(magenta). The yarns under the sphere are pulled in behind it (colour = yarn speed): model {mL} mm."},
           {5, "Longitudinal front: theory c t = {wL} mm, model {mL} mm along the yarn axes. The model lags: the crimp",
-           "must be pulled straight before a yarn carries load. Fronts follow the yarns, so the loaded region is a diamond."},
-          {8, "The longitudinal wave reaches the clamps (60 mm) and reflects. Behind it the transverse wave (white) runs at",
+           "must be pulled straight before a yarn carries load. Fronts follow the yarns, so the loaded region is a "
+           "diamond."},
+          {8,
+           "The longitudinal wave reaches the clamps (60 mm) and reflects. Behind it the transverse wave (white) runs "
+           "at",
            "U = {U} m/s (Smith's single-yarn theory, strain {eps} %): theory {wT} mm, model {mT} mm."},
           {20, "Reflected stretch waves now criss-cross the ply; the single-yarn theory says nothing about them.",
            "The deflection cone that moves with the sphere (red) grows at U: theory {wT} mm, model {mT} mm."},
-          {35, "The cone's edge stays close to Smith's front: theory {wT} mm, model {mT} mm. The overlay assumes fronts",
-           "along the yarns through the impact point (a diamond). The free warp yarns (vertical band) are dragged further."}};
+          {35,
+           "The cone's edge stays close to Smith's front: theory {wT} mm, model {mT} mm. The overlay assumes fronts",
+           "along the yarns through the impact point (a diamond). The free warp yarns (vertical band) are dragged "
+           "further."}};
     } else {
       d.overrides.insert(d.overrides.end(), quick_fabric.begin(), quick_fabric.end());
       d.end_time_us = 16;
-      d.key_frames = {{1.5, "Longitudinal front: theory {wL} mm (magenta), model {mL} mm.", "Transverse front: theory {wT} mm, model {mT} mm."},
-                      {3, "Longitudinal front: theory {wL} mm (magenta), model {mL} mm.", "Transverse front: theory {wT} mm, model {mT} mm."},
-                      {15, "Transverse front: theory {wT} mm (white), model {mT} mm.", "The longitudinal front has left the ply."}};
+      d.key_frames = {
+          {1.5, "Longitudinal front: theory {wL} mm (magenta), model {mL} mm.",
+           "Transverse front: theory {wT} mm, model {mT} mm."},
+          {3, "Longitudinal front: theory {wL} mm (magenta), model {mL} mm.",
+           "Transverse front: theory {wT} mm, model {mT} mm."},
+          {15, "Transverse front: theory {wT} mm (white), model {mT} mm.", "The longitudinal front has left the ply."}};
     }
     out.push_back(d);
   }
@@ -122,7 +135,9 @@ std::vector<Demo> build(bool quick) {
     d.title = "2. Friction matters";
     d.summary = "mu = 0.02, 0.2 and 1.0 at 260 m/s side by side, with the projectile velocity histories overlaid";
     d.overrides = {"projectile.velocity_mps=260"};
-    d.runs = {{"mu = 0.02", {"yarn.friction=0.02"}}, {"mu = 0.2", {"yarn.friction=0.2"}}, {"mu = 1.0", {"yarn.friction=1.0"}}};
+    d.runs = {{"mu = 0.02", {"yarn.friction=0.02"}},
+              {"mu = 0.2", {"yarn.friction=0.2"}},
+              {"mu = 1.0", {"yarn.friction=1.0"}}};
     d.view = "oblique";
     d.field = "strain";
     d.charts = {DemoChart::velocity_history, DemoChart::broken_yarns};
@@ -131,7 +146,8 @@ std::vector<Demo> build(bool quick) {
     if (!quick) {
       d.end_time_us = 300;
       d.key_frames = {
-          {20, "Same sphere, same 260 m/s: only the friction between yarns (mu) differs. Colour = strain / failure strain.",
+          {20,
+           "Same sphere, same 260 m/s: only the friction between yarns (mu) differs. Colour = strain / failure strain.",
            "So far all three look alike: the two yarns under the projectile and their neighbours stretch."},
           {60, "Low mu: crossings slip and yarns slide aside under the sphere. High mu: crossings lock and the load",
            "stays on the yarns under the sphere. Projectile speed now: {vr}."},
@@ -161,7 +177,8 @@ std::vector<Demo> build(bool quick) {
     if (!quick) {
       d.end_time_us = 400;
       d.key_frames = {
-          {25, "Weft yarns (along x) are clamped at left and right; warp yarns (along y) have free ends top and bottom.",
+          {25,
+           "Weft yarns (along x) are clamped at left and right; warp yarns (along y) have free ends top and bottom.",
            "At 360 m/s the yarns under the sphere reach their failure strain much sooner than at 200 m/s."},
           {60, "The clamped weft yarns cannot pull in from their ends: they take the load and break. Free warp yarns",
            "can slide out from under the sphere instead. Broken yarns so far: {broken}."},
@@ -188,8 +205,10 @@ std::vector<Demo> build(bool quick) {
     d.field = "strain";
     d.charts = {DemoChart::velocity_history};
     d.slow_motion_us_per_s = 100;
-    d.note = std::string("2 real yarns per modelled yarn (4x fewer nodes) so the slow runs near the limit finish; "
-                         "BL ") + fmt("%.1f m/s ", bl.limit_mps) + bl.how;
+    d.note = std::string(
+                 "2 real yarns per modelled yarn (4x fewer nodes) so the slow runs near the limit finish; "
+                 "BL ") +
+             fmt("%.1f m/s ", bl.limit_mps) + bl.how;
     if (!quick) {
       d.end_time_us = 2500;
       d.key_frames = {
@@ -312,7 +331,9 @@ void DemoRunner::advance_to(double t_s) {
   for (auto& t : threads) t.join();
 }
 
-void DemoRunner::run_to_end() { advance_to(demo_.end_time_us * 1e-6 * 1.0001 + 1e-9); }
+void DemoRunner::run_to_end() {
+  advance_to(demo_.end_time_us * 1e-6 * 1.0001 + 1e-9);
+}
 
 bool DemoRunner::all_finished() const {
   return std::all_of(sims_.begin(), sims_.end(), [](const auto& s) { return s->finished(); });

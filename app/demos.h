@@ -28,7 +28,7 @@ double longitudinal_speed(const Scene& scene);
 // and the transverse front runs at U = c (sqrt(eps (1 + eps)) - eps) (Lagrangian).
 struct SmithWave {
   double strain = 0;
-  double transverse_speed_mps = 0;  // U, Lagrangian
+  double transverse_speed_mps = 0;    // U, Lagrangian
   double longitudinal_speed_mps = 0;  // c
 };
 SmithWave smith_wave(double impact_velocity_mps, double c_mps);
@@ -63,8 +63,8 @@ struct Demo {
   float range_max = 0;                 // colour range upper end (0 = the field's default)
   Overlay overlay = Overlay::none;
   std::vector<DemoChart> charts;
-  double slow_motion_us_per_s = 10;    // app pacing (simulated us per wall second)
-  std::string note;                    // what the demo's settings change vs the paper (caption / docs)
+  double slow_motion_us_per_s = 10;  // app pacing (simulated us per wall second)
+  std::string note;                  // what the demo's settings change vs the paper (caption / docs)
 };
 
 // The catalogue. `quick`: cheaper settings for tests (smaller fabric, fewer and earlier

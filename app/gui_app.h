@@ -15,13 +15,13 @@ namespace ravel::app::gui {
 
 struct GuiApp {
   SimWorker* worker = nullptr;
-  WorkerView view;               // the UI's copy of the worker's last published step
+  WorkerView view;  // the UI's copy of the worker's last published step
 
-  Scene draft;                   // what the Scene / Projectile / Solver panels edit
-  bool auto_restart = false;     // restart as soon as a panel value changes
-  std::string scene_error;       // the draft does not validate (names the key)
+  Scene draft;                // what the Scene / Projectile / Solver panels edit
+  bool auto_restart = false;  // restart as soon as a panel value changes
+  std::string scene_error;    // the draft does not validate (names the key)
 
-  Pacing pacing;                 // mirrors the worker's
+  Pacing pacing;  // mirrors the worker's
   double pause_at_us = -1;
 
   render::Camera camera;
@@ -32,10 +32,10 @@ struct GuiApp {
   float playing_render_scale = 1.0f;
 
   std::string export_dir = "ravel_export";
-  std::string notice;            // last export / action result, shown in the status panel
+  std::string notice;  // last export / action result, shown in the status panel
   bool notice_is_error = false;
   bool screenshot_requested = false;
-  std::string screenshot_path;   // where the requested screenshot goes
+  std::string screenshot_path;  // where the requested screenshot goes
 
   bool show_help = false;
   bool quit = false;
@@ -55,13 +55,13 @@ bool restart_with_draft(GuiApp& app);
 void set_draft_value(GuiApp& app, const std::string& key_value);
 
 // Panels. Each lays itself out in the rectangle given by the layout fields of app.
-void draw_left_panel(GuiApp& app);     // run controls, scene, projectile, friction, solver, view, export
-void draw_charts_panel(GuiApp& app);   // projectile velocity and the energy ledger vs time
-void draw_status_panel(GuiApp& app);   // time, speed, model size, outcome, warnings
+void draw_left_panel(GuiApp& app);    // run controls, scene, projectile, friction, solver, view, export
+void draw_charts_panel(GuiApp& app);  // projectile velocity and the energy ledger vs time
+void draw_status_panel(GuiApp& app);  // time, speed, model size, outcome, warnings
 
 // Exports (atomic files). Each sets app.notice.
-void export_results(GuiApp& app);      // history.csv + summary.json
-void export_scene(GuiApp& app);        // scene.toml that reproduces the current run
+void export_results(GuiApp& app);  // history.csv + summary.json
+void export_scene(GuiApp& app);    // scene.toml that reproduces the current run
 std::string next_screenshot_path(const GuiApp& app);
 
 }  // namespace ravel::app::gui

@@ -22,9 +22,8 @@ std::string tick_text(double v, double step) {
 
 // Polyline of one series, clipped to the plot by the caller's clip rect. Rows beyond a
 // few per pixel are thinned so a long run stays cheap to draw.
-void plot_rows(ImDrawList* dl, const std::vector<HistoryRow>& rows, RowValue value, ImU32 color,
-               float thickness, const ImVec2& p0, const ImVec2& p1, double x_max_s, double y_min,
-               double y_max) {
+void plot_rows(ImDrawList* dl, const std::vector<HistoryRow>& rows, RowValue value, ImU32 color, float thickness,
+               const ImVec2& p0, const ImVec2& p1, double x_max_s, double y_min, double y_max) {
   if (rows.size() < 2) return;
   const double sx = (p1.x - p0.x) / x_max_s, sy = (p1.y - p0.y) / (y_max - y_min);
   const size_t stride = std::max<size_t>(1, rows.size() / size_t(std::max(1.0f, (p1.x - p0.x) * 2)));
@@ -42,8 +41,7 @@ void plot_rows(ImDrawList* dl, const std::vector<HistoryRow>& rows, RowValue val
 
 const HistoryRow* row_at(const std::vector<HistoryRow>& rows, double t_s) {
   if (rows.empty()) return nullptr;
-  auto it = std::lower_bound(rows.begin(), rows.end(), t_s,
-                             [](const HistoryRow& r, double t) { return r.t_s < t; });
+  auto it = std::lower_bound(rows.begin(), rows.end(), t_s, [](const HistoryRow& r, double t) { return r.t_s < t; });
   if (it == rows.end()) return &rows.back();
   if (it != rows.begin() && std::abs(std::prev(it)->t_s - t_s) < std::abs(it->t_s - t_s)) --it;
   return &*it;
@@ -127,7 +125,8 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   const float y_label_y = ly + lh + fs * 0.15f;
 
   char widest[32];
-  std::snprintf(widest, sizeof widest, "%s", tick_text(std::abs(y_min) > std::abs(y_max) ? y_min : y_max, y_step).c_str());
+  std::snprintf(widest, sizeof widest, "%s",
+                tick_text(std::abs(y_min) > std::abs(y_max) ? y_min : y_max, y_step).c_str());
   const float left = ImGui::CalcTextSize(widest).x + fs * 0.9f;
   const ImVec2 p0(origin.x + left, y_label_y + fs * 1.5f);
   const ImVec2 p1(origin.x + size.x - fs * 0.8f, origin.y + size.y - fs * 2.6f);
@@ -136,7 +135,8 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   dl->AddText(ImVec2(origin.x + 2, origin.y), text, spec.title.c_str());
   for (size_t i = 0; i < items.size(); ++i) {
     const ImVec2 q = item_pos[i];
-    dl->AddLine(ImVec2(q.x, q.y + lh * 0.5f), ImVec2(q.x + sw, q.y + lh * 0.5f), items[i].color, items[i].faint ? 1.5f : 3.0f);
+    dl->AddLine(ImVec2(q.x, q.y + lh * 0.5f), ImVec2(q.x + sw, q.y + lh * 0.5f), items[i].color,
+                items[i].faint ? 1.5f : 3.0f);
     dl->AddText(ImVec2(q.x + sw + pad, q.y), items[i].faint ? dim : text, items[i].text.c_str());
   }
   dl->AddText(ImVec2(origin.x + 2, y_label_y), dim, spec.y_label.c_str());
@@ -168,11 +168,10 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   dl->PushClipRect(p0, p1, true);
   for (const auto& o : spec.overlays)
     for (const auto& s : spec.series)
-      plot_rows(dl, *o.rows, s.value, o.color ? o.color : with_alpha(s.color, 0.28f), 1.4f, p0, p1, x_max,
-                y_min, y_max);
+      plot_rows(dl, *o.rows, s.value, o.color ? o.color : with_alpha(s.color, 0.28f), 1.4f, p0, p1, x_max, y_min,
+                y_max);
   if (spec.rows)
-    for (const auto& s : spec.series)
-      plot_rows(dl, *spec.rows, s.value, s.color, 2.0f, p0, p1, x_max, y_min, y_max);
+    for (const auto& s : spec.series) plot_rows(dl, *spec.rows, s.value, s.color, 2.0f, p0, p1, x_max, y_min, y_max);
   dl->PopClipRect();
 
   // Hover read-out: the values of the current run at the time under the mouse.

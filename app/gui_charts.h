@@ -29,7 +29,7 @@ struct ChartOverlay {
 struct ChartSpec {
   const char* id = "chart";
   std::string title;
-  std::string x_label = "time (\xC2\xB5s)";   // the x axis is always time
+  std::string x_label = "time (\xC2\xB5s)";  // the x axis is always time
   std::string y_label;                       // with unit, e.g. "velocity (m/s)"
   double x_max_s = 0;                        // axis end, seconds
   double y_min = 0, y_max = 1;               // axis range (grown to fit the data)

@@ -164,7 +164,8 @@ void CompareMode::resume() {
 }
 
 double CompareMode::next_stop_s() const {
-  if (key_ < int(demo_.key_frames.size()) && demo_.key_frames[key_].t_us >= 0) return demo_.key_frames[key_].t_us * 1e-6;
+  if (key_ < int(demo_.key_frames.size()) && demo_.key_frames[key_].t_us >= 0)
+    return demo_.key_frames[key_].t_us * 1e-6;
   return -1;
 }
 

@@ -66,8 +66,8 @@ class CompareMode {
   std::vector<std::unique_ptr<SimWorker>> workers_;
   std::vector<WorkerView> views_;
   demos::SharedClock clock_;
-  int key_ = 0;            // next key frame
-  bool at_key_ = false;    // paused at key frame key_ - 1
+  int key_ = 0;          // next key frame
+  bool at_key_ = false;  // paused at key frame key_ - 1
   bool playing_ = true;
   double last_wall_ = -1;
   std::vector<std::string> caption_;

@@ -33,11 +33,10 @@ const ImVec4 kWarn(1.0f, 0.80f, 0.30f, 1.0f);
 const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
 
 // A double kept in SI, edited in display units (display = si * scale).
-bool slider_si(const char* label, double* si, double scale, double lo, double hi, const char* fmt,
-               bool log = false) {
+bool slider_si(const char* label, double* si, double scale, double lo, double hi, const char* fmt, bool log = false) {
   double v = *si * scale;
-  const bool changed = ImGui::SliderScalar(label, ImGuiDataType_Double, &v, &lo, &hi, fmt,
-                                           log ? ImGuiSliderFlags_Logarithmic : 0);
+  const bool changed =
+      ImGui::SliderScalar(label, ImGuiDataType_Double, &v, &lo, &hi, fmt, log ? ImGuiSliderFlags_Logarithmic : 0);
   if (changed) *si = v / scale;
   return changed;
 }
@@ -112,8 +111,9 @@ void run_controls(GuiApp& app) {
     restart_with_draft(app);
   if (dirty) ImGui::TextColored(kAccent, "Edited values are not running yet.");
   ImGui::Checkbox("Restart on every change", &app.auto_restart);
-  help_marker("What-if mode: each edit in the panels below restarts the run at once. "
-              "The run it replaces stays in the charts as a faint overlay.");
+  help_marker(
+      "What-if mode: each edit in the panels below restarts the run at once. "
+      "The run it replaces stays in the charts as a faint overlay.");
 
   ImGui::Spacing();
   bool pacing_changed = false;
@@ -128,8 +128,7 @@ void run_controls(GuiApp& app) {
   }
   ImGui::BeginDisabled(app.pacing.max_speed);
   ImGui::SetNextItemWidth(full - fs * 7.2f);
-  pacing_changed |= slider_si("\xC2\xB5s per second", &app.pacing.sim_us_per_wall_s, 1.0, 0.05, 50.0,
-                              "%.2f", true);
+  pacing_changed |= slider_si("\xC2\xB5s per second", &app.pacing.sim_us_per_wall_s, 1.0, 0.05, 50.0, "%.2f", true);
   ImGui::EndDisabled();
   if (pacing_changed) w.set_pacing(app.pacing);
   ImGui::SetNextItemWidth(full - fs * 7.2f);
@@ -165,8 +164,9 @@ bool scene_section(GuiApp& app) {
   }
   changed |= slider_si("width (mm)", &s.fabric.width_m, 1e3, 5, 200, "%.1f");
   changed |= slider_si("length (mm)", &s.fabric.length_m, 1e3, 5, 200, "%.1f");
-  help_marker("Fabric size. Larger fabrics have more nodes and step more slowly "
-              "(the default 120 x 120 mm is about 10,000 nodes in a quarter model).");
+  help_marker(
+      "Fabric size. Larger fabrics have more nodes and step more slowly "
+      "(the default 120 x 120 mm is about 10,000 nodes in a quarter model).");
   ImGui::TextUnformatted("clamped");
   ImGui::SameLine();
   changed |= ImGui::Checkbox("left", &s.fabric.clamped.left);
@@ -176,7 +176,8 @@ bool scene_section(GuiApp& app) {
   changed |= ImGui::Checkbox("bottom", &s.fabric.clamped.bottom);
   ImGui::SameLine();
   changed |= ImGui::Checkbox("top", &s.fabric.clamped.top);
-  help_marker("left / right: x = -W/2, +W/2 (they hold the weft yarns); bottom / top: y = -L/2, +L/2 (the warp yarns).");
+  help_marker(
+      "left / right: x = -W/2, +W/2 (they hold the weft yarns); bottom / top: y = -L/2, +L/2 (the warp yarns).");
   changed |= slider_si("failure strain (%)", &s.yarn.failure_strain, 100, 1.0, 10.0, "%.2f");
   int mat = s.yarn.material == Material::zener ? 0 : 1;
   if (ImGui::Combo("material", &mat, "Zener (viscoelastic)\0linear elastic\0")) {
@@ -216,8 +217,9 @@ bool projectile_section(GuiApp& app) {
 
 bool friction_section(GuiApp& app) {
   bool changed = slider_si("yarn-yarn mu", &app.draft.yarn.friction, 1, 0, 1, "%.2f");
-  help_marker("Inter-yarn Coulomb friction (Eq 12-15). The paper studies 0 to 1; "
-              "0.2 absorbs the most energy at 260 m/s.");
+  help_marker(
+      "Inter-yarn Coulomb friction (Eq 12-15). The paper studies 0 to 1; "
+      "0.2 absorbs the most energy at 260 m/s.");
   for (double mu : {0.0, 0.1, 0.2, 0.4, 1.0}) {
     char label[16];
     std::snprintf(label, sizeof label, "%.1f", mu);
@@ -239,8 +241,9 @@ bool solver_section(GuiApp& app) {
     changed = true;
   }
   changed |= slider_si("dt factor", &s.dt_factor, 1, 0.05, 1.5, "%.2f");
-  help_marker("alpha of Eq 4: dt = alpha L / c. Above about 1 the explicit scheme is unstable "
-              "and the run will diverge (it pauses and says so).");
+  help_marker(
+      "alpha of Eq 4: dt = alpha L / c. Above about 1 the explicit scheme is unstable "
+      "and the run will diverge (it pauses and says so).");
   changed |= ImGui::SliderInt("contact iterations", &s.contact_iterations, 1, 10);
   help_marker("N passes of the yarn contact correction per step (Eq 16-17).");
   int sym = s.symmetry == SymmetryMode::automatic ? 0 : 1;
@@ -338,8 +341,7 @@ void export_section(GuiApp& app) {
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("history.csv and summary.json of the run on screen");
   ImGui::SameLine();
   if (ImGui::Button("Scene TOML", ImVec2(third, 0))) export_scene(app);
-  if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("A scene file that reproduces the run on screen: ravel gui FILE");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("A scene file that reproduces the run on screen: ravel gui FILE");
   const int n = int(app.view.past_runs.size());
   ImGui::BeginDisabled(n == 0);
   char label[64];
@@ -533,15 +535,33 @@ void draw_left_panel(GuiApp& app) {
 }
 
 namespace {
-double v_proj(const HistoryRow& r) { return r.projectile_velocity_mps; }
-double e_proj(const HistoryRow& r) { return r.ledger.projectile_ke_J; }
-double e_fabric(const HistoryRow& r) { return r.ledger.fabric_ke_J; }
-double e_strain(const HistoryRow& r) { return r.ledger.strain_energy_J; }
-double e_visc(const HistoryRow& r) { return r.ledger.viscous_J; }
-double e_fric(const HistoryRow& r) { return r.ledger.friction_work_J; }
-double e_pfric(const HistoryRow& r) { return r.ledger.projectile_friction_J; }
-double e_contact(const HistoryRow& r) { return r.ledger.contact_loss_J; }
-double e_released(const HistoryRow& r) { return r.ledger.released_J; }
+double v_proj(const HistoryRow& r) {
+  return r.projectile_velocity_mps;
+}
+double e_proj(const HistoryRow& r) {
+  return r.ledger.projectile_ke_J;
+}
+double e_fabric(const HistoryRow& r) {
+  return r.ledger.fabric_ke_J;
+}
+double e_strain(const HistoryRow& r) {
+  return r.ledger.strain_energy_J;
+}
+double e_visc(const HistoryRow& r) {
+  return r.ledger.viscous_J;
+}
+double e_fric(const HistoryRow& r) {
+  return r.ledger.friction_work_J;
+}
+double e_pfric(const HistoryRow& r) {
+  return r.ledger.projectile_friction_J;
+}
+double e_contact(const HistoryRow& r) {
+  return r.ledger.contact_loss_J;
+}
+double e_released(const HistoryRow& r) {
+  return r.ledger.released_J;
+}
 }  // namespace
 
 void draw_charts_panel(GuiApp& app) {
@@ -551,8 +571,8 @@ void draw_charts_panel(GuiApp& app) {
   ImGui::SetNextWindowSize(ImVec2(w, app.bottom_h));
   ImGui::Begin("charts", nullptr,
                ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
-                   ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoScrollbar |
-                   ImGuiWindowFlags_NoBringToFrontOnFocus | kFixedPanel);
+                   ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoBringToFrontOnFocus |
+                   kFixedPanel);
   const WorkerView& v = app.view;
   std::vector<ChartOverlay> overlays;
   for (const auto& r : v.past_runs) overlays.push_back({r.label, &r.history});

@@ -16,28 +16,32 @@ constexpr auto kPaceSleepMax = std::chrono::milliseconds(5);
 // If the solver falls this far behind a slow-motion rate, re-anchor instead of racing.
 constexpr double kMaxLag_s = 0.25;
 
-double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+double seconds(Clock::duration d) {
+  return std::chrono::duration<double>(d).count();
+}
 
 std::string run_label(long run_id, const Scene& s) {
   char b[160];
-  std::snprintf(b, sizeof b, "run %ld: mu %.2f, %.0f m/s", run_id, s.yarn.friction,
-                s.projectile.velocity_mps);
+  std::snprintf(b, sizeof b, "run %ld: mu %.2f, %.0f m/s", run_id, s.yarn.friction, s.projectile.velocity_mps);
   return b;
 }
 }  // namespace
 
 const char* to_string(WorkerState s) {
   switch (s) {
-    case WorkerState::running: return "running";
-    case WorkerState::paused: return "paused";
-    case WorkerState::finished: return "finished";
-    case WorkerState::diverged: return "diverged";
+    case WorkerState::running:
+      return "running";
+    case WorkerState::paused:
+      return "paused";
+    case WorkerState::finished:
+      return "finished";
+    case WorkerState::diverged:
+      return "diverged";
   }
   return "?";
 }
 
-SimWorker::SimWorker(const Scene& scene, bool start_paused)
-    : sim_(std::make_unique<Simulation>(scene)), scene_(scene) {
+SimWorker::SimWorker(const Scene& scene, bool start_paused) : sim_(std::make_unique<Simulation>(scene)), scene_(scene) {
   paused_.store(start_paused);
   pacing_live_ = pacing_;
   publish(true);
@@ -174,8 +178,7 @@ bool SimWorker::sync(WorkerView& view) {
     changed = true;
   }
   if (view.history.size() > s.history.size()) view.history.clear();
-  view.history.insert(view.history.end(), s.history.begin() + long(view.history.size()),
-                      s.history.end());
+  view.history.insert(view.history.end(), s.history.begin() + long(view.history.size()), s.history.end());
   view.step_count = s.step_count;
   view.summary = s.summary;
   view.state = s.state;
@@ -193,8 +196,7 @@ bool SimWorker::wait_for_steps(long steps, std::chrono::milliseconds timeout) {
   const long issued = commands_issued_.load();  // commands given before this call count
   std::unique_lock<std::mutex> lk(mutex_);
   return published_.wait_for(lk, timeout, [&] {
-    return shared_.commands_applied >= issued &&
-           (shared_.step_count >= steps || shared_.state != WorkerState::running);
+    return shared_.commands_applied >= issued && (shared_.step_count >= steps || shared_.state != WorkerState::running);
   });
 }
 
@@ -223,8 +225,7 @@ void SimWorker::retire_current_run() {
   run.history = sim_->history();
   std::lock_guard<std::mutex> lk(mutex_);
   shared_.past_runs.push_back(std::move(run));
-  while (int(shared_.past_runs.size()) > max_past_runs_)
-    shared_.past_runs.erase(shared_.past_runs.begin());
+  while (int(shared_.past_runs.size()) > max_past_runs_) shared_.past_runs.erase(shared_.past_runs.begin());
   ++shared_.past_serial;
 }
 
@@ -333,8 +334,7 @@ void SimWorker::loop() {
     const bool changed = apply_commands();
     if (exit_.load()) break;
 
-    const bool may_step = !diverged_ && !sim_->finished() &&
-                          (!paused_.load() || steps_requested_.load() > 0);
+    const bool may_step = !diverged_ && !sim_->finished() && (!paused_.load() || steps_requested_.load() > 0);
     if (!may_step) {
       // Single steps asked of a run that has ended cannot be honoured: drop them, or they
       // would stay pending (wait_idle never returns) and leak into the next run.

@@ -40,8 +40,8 @@ namespace ravel::app {
 
 // How simulated time relates to wall time.
 struct Pacing {
-  bool max_speed = true;            // step as fast as the solver can
-  double sim_us_per_wall_s = 2.0;   // slow motion when !max_speed (simulated us per wall second)
+  bool max_speed = true;           // step as fast as the solver can
+  double sim_us_per_wall_s = 2.0;  // slow motion when !max_speed (simulated us per wall second)
 };
 
 enum class WorkerState {
@@ -61,12 +61,12 @@ struct PastRun {
 
 // What the UI reads. Filled by SimWorker::sync(); everything in it comes from one step.
 struct WorkerView {
-  long run_id = 0;                 // changes on reset / restart
-  Scene scene;                     // the scene of the current run (as built)
+  long run_id = 0;  // changes on reset / restart
+  Scene scene;      // the scene of the current run (as built)
   Frame frame;
-  std::uint64_t frame_serial = 0;  // changes with every published frame
-  long step_count = 0;             // steps of the current run when the frame was taken
-  std::vector<HistoryRow> history; // of the current run, from t = 0
+  std::uint64_t frame_serial = 0;   // changes with every published frame
+  long step_count = 0;              // steps of the current run when the frame was taken
+  std::vector<HistoryRow> history;  // of the current run, from t = 0
   Summary summary;
   WorkerState state = WorkerState::paused;
   std::string message;             // divergence diagnosis, scene error, ... ("" = none)
@@ -89,16 +89,16 @@ class SimWorker {
   void play();
   void pause();
   void toggle_pause();
-  void step_once(int steps = 1);                // while paused: advance this many steps
-  void reset();                                 // rebuild the current scene, t = 0 (stays paused if paused)
-  void restart(const Scene& scene);             // rebuild with new values, t = 0, and play
+  void step_once(int steps = 1);     // while paused: advance this many steps
+  void reset();                      // rebuild the current scene, t = 0 (stays paused if paused)
+  void restart(const Scene& scene);  // rebuild with new values, t = 0, and play
   void set_pacing(const Pacing& pacing);
-  void set_threads(int threads);                // solver threads, applied live
+  void set_threads(int threads);  // solver threads, applied live
   // Pause every run when its simulated time reaches t_s (< 0: never). Play continues
   // past it; a reset or restart stops there again.
   void pause_at(double t_s);
   void clear_past_runs();
-  void set_max_past_runs(int n);                // default 6
+  void set_max_past_runs(int n);  // default 6
   void request_exit();
 
   bool paused() const { return paused_.load(); }
@@ -144,10 +144,10 @@ class SimWorker {
   };
 
   void loop();
-  bool apply_commands();                       // at a step boundary; true if anything changed
-  void rebuild(const Scene& scene);            // worker thread only; keeps the old run if the scene is bad
-  void publish(bool force);                    // worker thread only
-  void retire_current_run();                   // current history -> past runs
+  bool apply_commands();             // at a step boundary; true if anything changed
+  void rebuild(const Scene& scene);  // worker thread only; keeps the old run if the scene is bad
+  void publish(bool force);          // worker thread only
+  void retire_current_run();         // current history -> past runs
   WorkerState current_state() const;
   void notify();
 
@@ -182,12 +182,12 @@ class SimWorker {
   std::atomic<bool> has_pending_{false};
   std::atomic<long> commands_issued_{0};
 
-  mutable std::mutex mutex_;     // guards pending_ and shared_
-  std::condition_variable wake_;      // worker waits here when idle
-  std::condition_variable published_; // tests wait here
+  mutable std::mutex mutex_;           // guards pending_ and shared_
+  std::condition_variable wake_;       // worker waits here when idle
+  std::condition_variable published_;  // tests wait here
   Pending pending_;
   Shared shared_;
-  Pacing pacing_;                // last requested pacing (for pacing())
+  Pacing pacing_;  // last requested pacing (for pacing())
 
   std::thread thread_;
 };

@@ -104,13 +104,13 @@ int main(int argc, char** argv) {
       float scale;
       float merge = 0;
     } matrix[] = {
-        {1600, 1200, 4, 8, G::tubes, 1},   {1600, 1200, 4, 8, G::ribbons, 1},
-        {1600, 1200, 0, 8, G::tubes, 1},   {1600, 1200, 0, 4, G::tubes, 1},
-        {1600, 1200, 0, 8, G::ribbons, 1}, {1200, 640, 0, 8, G::tubes, 1},
-        {1200, 640, 0, 4, G::tubes, 1},    {1200, 640, 0, 8, G::ribbons, 1},
-        {1200, 640, 0, 8, G::ribbons, 0.75f}, {1200, 640, 0, 8, G::ribbons, 0.5f},
+        {1600, 1200, 4, 8, G::tubes, 1},        {1600, 1200, 4, 8, G::ribbons, 1},
+        {1600, 1200, 0, 8, G::tubes, 1},        {1600, 1200, 0, 4, G::tubes, 1},
+        {1600, 1200, 0, 8, G::ribbons, 1},      {1200, 640, 0, 8, G::tubes, 1},
+        {1200, 640, 0, 4, G::tubes, 1},         {1200, 640, 0, 8, G::ribbons, 1},
+        {1200, 640, 0, 8, G::ribbons, 0.75f},   {1200, 640, 0, 8, G::ribbons, 0.5f},
         {1200, 640, 0, 8, G::ribbons, 1, 0.5f}, {1600, 1200, 0, 8, G::ribbons, 0.5f},
-        {160, 120, 0, 8, G::tubes, 1},     {160, 120, 0, 8, G::ribbons, 1},
+        {160, 120, 0, 8, G::tubes, 1},          {160, 120, 0, 8, G::ribbons, 1},
     };
     for (const auto& m : matrix) {
       render::ViewOptions o = options;
@@ -133,8 +133,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     render::Renderer renderer;
-    render::Camera camera =
-        render::fitted_camera(frame, c.options.view, static_cast<float>(c.width) / c.height);
+    render::Camera camera = render::fitted_camera(frame, c.options.view, static_cast<float>(c.width) / c.height);
     if (zoom > 0 && zoom != 1.0f) camera.zoom(zoom);
 
     std::vector<double> times;
@@ -157,11 +156,10 @@ int main(int argc, char** argv) {
       png_ms = ms_since(t0);
     }
     const render::DrawStats& st = renderer.stats();
-    std::printf("%d,%d,%zu,%d,%d,%d,%s,%s,%.2f,%.2f,%.1f,%.1f,%.1f,%.1f\n", c.width, c.height,
-                frame.elem_a.size(), st.tubes_drawn, c.samples, c.options.tube_sides,
-                render::to_string(c.options.view), st.ribbons ? "ribbons" : "tubes",
-                static_cast<double>(st.fabric_width) / c.width, c.options.merge_px, st.yarn_width_px,
-                times[times.size() / 2], first, png_ms);
+    std::printf("%d,%d,%zu,%d,%d,%d,%s,%s,%.2f,%.2f,%.1f,%.1f,%.1f,%.1f\n", c.width, c.height, frame.elem_a.size(),
+                st.tubes_drawn, c.samples, c.options.tube_sides, render::to_string(c.options.view),
+                st.ribbons ? "ribbons" : "tubes", static_cast<double>(st.fabric_width) / c.width, c.options.merge_px,
+                st.yarn_width_px, times[times.size() / 2], first, png_ms);
     std::fflush(stdout);
   }
   return 0;

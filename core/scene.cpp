@@ -114,15 +114,26 @@ constexpr double kMaxSteps = 1e9;
 std::vector<KeyDef> make_defs() {
   std::vector<KeyDef> defs;
   {
-    KeyDef d{"name", "", "scene name, shown in captions and summaries", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+    KeyDef d{"name", "", "scene name, shown in captions and summaries", Type::text, 1.0, 0, 0, false, {}, {}, {},
+             {},     {}};
     d.set_text = [](Scene& s, const std::string& v) { s.name = v; };
     d.get_text = [](const Scene& s) { return s.name; };
     defs.push_back(d);
   }
   {
-    KeyDef d{"fabric.weave", "",
+    KeyDef d{"fabric.weave",
+             "",
              "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)",
-             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"plain", "single_yarn"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn;
@@ -140,9 +151,19 @@ std::vector<KeyDef> make_defs() {
   NUM("fabric.thickness_mm", "mm", "fabric thickness; the yarn contact diameter D is half of it", 1e-3, 0, true, inf,
       fabric.thickness_m);
   {
-    KeyDef d{"fabric.clamped", "",
+    KeyDef d{"fabric.clamped",
+             "",
              "clamped edges: comma list of left,right (x = -W/2, +W/2), bottom,top (y = -L/2, +L/2), or all / none",
-             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.set_text = [](Scene& s, const std::string& v) {
       ClampedEdges c{false, false, false, false};
       std::stringstream ss(v);
@@ -171,7 +192,19 @@ std::vector<KeyDef> make_defs() {
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
   {
-    KeyDef d{"yarn.material", "", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+    KeyDef d{"yarn.material",
+             "",
+             "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)",
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"zener", "elastic"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.yarn.material = v == "zener" ? Material::zener : Material::elastic;
@@ -192,7 +225,19 @@ std::vector<KeyDef> make_defs() {
       "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0,
       yarn.bending_fraction);
   {
-    KeyDef d{"projectile.shape", "", "sphere, cylinder (flat-faced) or cone", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+    KeyDef d{"projectile.shape",
+             "",
+             "sphere, cylinder (flat-faced) or cone",
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"sphere", "cylinder", "cone"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.projectile.shape = v == "sphere" ? ShapeKind::sphere : v == "cylinder" ? ShapeKind::cylinder : ShapeKind::cone;
@@ -212,9 +257,19 @@ std::vector<KeyDef> make_defs() {
   NUM("projectile.obliquity_deg", "deg", "angle of the flight path from the fabric normal (in the x-z plane)", 1, 0,
       false, 80, projectile.obliquity_deg);
   {
-    KeyDef d{"solver.model", "",
+    KeyDef d{"solver.model",
+             "",
              "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)",
-             Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"sliding", "pin_jointed"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed;
@@ -232,7 +287,19 @@ std::vector<KeyDef> make_defs() {
   NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0,
       solver.friction_penalty);
   {
-    KeyDef d{"solver.symmetry", "", "auto (smallest model the scene's symmetry allows) or full", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+    KeyDef d{"solver.symmetry",
+             "",
+             "auto (smallest model the scene's symmetry allows) or full",
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"auto", "full"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full;
@@ -243,7 +310,19 @@ std::vector<KeyDef> make_defs() {
     defs.push_back(d);
   }
   {
-    KeyDef d{"solver.precision", "", "double or float: floating-point precision of the state", Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+    KeyDef d{"solver.precision",
+             "",
+             "double or float: floating-point precision of the state",
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
     d.choices = {"double", "float"};
     d.set_text = [](Scene& s, const std::string& v) {
       s.solver.precision = v == "double" ? Precision::double_precision : Precision::single_precision;

@@ -85,8 +85,7 @@ Annotator::Annotator() : impl_(std::make_unique<Impl>()) {
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex),
-                        reinterpret_cast<void*>(2 * sizeof(float)));
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex), reinterpret_cast<void*>(2 * sizeof(float)));
   glBindVertexArray(0);
 }
 
@@ -97,11 +96,15 @@ Annotator::~Annotator() {
   if (r.prog) glDeleteProgram(r.prog);
 }
 
-float Annotator::text_width(const std::string& s, float scale) { return OverlayBatch::text_width(s, scale); }
-float Annotator::default_scale(int h) { return std::max(1.0f, std::round(float(h) / 420.0f)); }
+float Annotator::text_width(const std::string& s, float scale) {
+  return OverlayBatch::text_width(s, scale);
+}
+float Annotator::default_scale(int h) {
+  return std::max(1.0f, std::round(float(h) / 420.0f));
+}
 
-void Annotator::draw(const Camera& camera, const std::vector<WorldPolyline>& lines,
-                     const std::vector<TextBlock>& texts, int x, int y, int w, int h) {
+void Annotator::draw(const Camera& camera, const std::vector<WorldPolyline>& lines, const std::vector<TextBlock>& texts,
+                     int x, int y, int w, int h) {
   if (w <= 0 || h <= 0) return;
   std::vector<OverlayVertex> v;
   const float ui = std::max(1.0f, float(h) / 600.0f);

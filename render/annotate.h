@@ -20,13 +20,13 @@
 namespace ravel::render {
 
 struct WorldPolyline {
-  std::vector<Vec3> points;      // world coordinates (m)
-  bool closed = false;           // join the last point to the first
+  std::vector<Vec3> points;  // world coordinates (m)
+  bool closed = false;       // join the last point to the first
   Vec3 color{1.0f, 0.85f, 0.2f};
-  float width_px = 2.5f;         // line width in viewport pixels (before ui scale)
+  float width_px = 2.5f;  // line width in viewport pixels (before ui scale)
   bool dashed = false;
-  std::string label;             // drawn beside `label_at` (empty: none)
-  Vec3 label_at{0, 0, 0};        // world point the label sits next to
+  std::string label;       // drawn beside `label_at` (empty: none)
+  Vec3 label_at{0, 0, 0};  // world point the label sits next to
 };
 
 struct TextBlock {
@@ -34,10 +34,10 @@ struct TextBlock {
   // bottom edge to the block's bottom; negative x: from the right edge to its right side.
   float x = 0, y = 0;
   std::vector<std::string> lines;
-  std::vector<Vec3> colors;      // per line; missing entries are white
-  float scale = 0;               // font pixel size; 0 = from the viewport height
-  bool panel = true;             // dark translucent panel behind the text
-  float min_width_px = 0;        // panel at least this wide (a full-width banner)
+  std::vector<Vec3> colors;  // per line; missing entries are white
+  float scale = 0;           // font pixel size; 0 = from the viewport height
+  bool panel = true;         // dark translucent panel behind the text
+  float min_width_px = 0;    // panel at least this wide (a full-width banner)
 };
 
 // A line segment in viewport pixels (origin top-left, y down).
@@ -57,8 +57,8 @@ class Annotator {
 
   // Draw into the viewport (x, y, w, h) of the bound framebuffer, GL window coordinates
   // (y up), on top of what is there. Nothing is cleared.
-  void draw(const Camera& camera, const std::vector<WorldPolyline>& lines,
-            const std::vector<TextBlock>& texts, int x, int y, int w, int h);
+  void draw(const Camera& camera, const std::vector<WorldPolyline>& lines, const std::vector<TextBlock>& texts, int x,
+            int y, int w, int h);
 
   // Width in pixels of a text line at a font scale (as drawn).
   static float text_width(const std::string& s, float scale);

@@ -59,15 +59,21 @@ static Vec3 eye_direction(float yaw_deg, float pitch_deg) {
   return {std::cos(p) * std::cos(y), std::cos(p) * std::sin(y), std::sin(p)};
 }
 
-Vec3 Camera::eye() const { return target + eye_direction(yaw_deg, pitch_deg) * distance_m; }
-Vec3 Camera::forward() const { return eye_direction(yaw_deg, pitch_deg) * -1.0f; }
+Vec3 Camera::eye() const {
+  return target + eye_direction(yaw_deg, pitch_deg) * distance_m;
+}
+Vec3 Camera::forward() const {
+  return eye_direction(yaw_deg, pitch_deg) * -1.0f;
+}
 // Screen up is the derivative of the eye direction along pitch: defined even when
 // looking straight down (pitch = +-90), where a fixed world-up vector would not be.
 Vec3 Camera::up() const {
   const float y = yaw_deg * kDegToRad, p = pitch_deg * kDegToRad;
   return {-std::sin(p) * std::cos(y), -std::sin(p) * std::sin(y), std::cos(p)};
 }
-Vec3 Camera::right() const { return normalize(cross(forward(), up())); }
+Vec3 Camera::right() const {
+  return normalize(cross(forward(), up()));
+}
 
 void Camera::orbit(float d_yaw_deg, float d_pitch_deg) {
   yaw_deg = std::fmod(yaw_deg + d_yaw_deg, 360.0f);
@@ -85,16 +91,14 @@ void Camera::pan(float dx, float dy) {
 
 std::array<float, 16> Camera::view_matrix() const {
   const Vec3 f = forward(), r = right(), u = cross(r, f), e = eye();
-  return {r[0], u[0], -f[0], 0, r[1],       u[1],       -f[1],     0,
-          r[2], u[2], -f[2], 0, -dot(r, e), -dot(u, e), dot(f, e), 1};
+  return {r[0], u[0], -f[0], 0, r[1], u[1], -f[1], 0, r[2], u[2], -f[2], 0, -dot(r, e), -dot(u, e), dot(f, e), 1};
 }
 
 std::array<float, 16> Camera::projection_matrix(float aspect) const {
   // Near / far from the distance: the scene is a fabric of a few times the distance at most.
   const float n = distance_m * 0.02f, f = distance_m * 20.0f;
   const float t = 1.0f / std::tan(0.5f * fov_y_deg * kDegToRad);
-  return {t / aspect,          0, 0, 0, 0, t, 0, 0, 0, 0, (f + n) / (n - f), -1, 0, 0,
-          2 * f * n / (n - f), 0};
+  return {t / aspect, 0, 0, 0, 0, t, 0, 0, 0, 0, (f + n) / (n - f), -1, 0, 0, 2 * f * n / (n - f), 0};
 }
 
 std::array<float, 16> Camera::view_projection(float aspect) const {
@@ -102,8 +106,7 @@ std::array<float, 16> Camera::view_projection(float aspect) const {
 }
 
 bool Camera::project(const Vec3& world, float aspect, float* u, float* v) const {
-  const auto clip =
-      mul(view_projection(aspect), std::array<float, 4>{world[0], world[1], world[2], 1.0f});
+  const auto clip = mul(view_projection(aspect), std::array<float, 4>{world[0], world[1], world[2], 1.0f});
   if (clip[3] <= 0) return false;
   *u = 0.5f * (clip[0] / clip[3] + 1.0f);
   *v = 0.5f * (1.0f - clip[1] / clip[3]);
@@ -119,8 +122,7 @@ void Camera::fit_box(const Vec3& lo, const Vec3& hi, float aspect, float margin)
   // same for u with the vertical half angle: the smallest d that satisfies all 8 corners.
   float d = 1e-4f;
   for (int i = 0; i < 8; ++i) {
-    const Vec3 c =
-        Vec3{(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]} - target;
+    const Vec3 c = Vec3{(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]} - target;
     d = std::max(d, dot(c, w) + std::abs(dot(c, r)) / tx);
     d = std::max(d, dot(c, w) + std::abs(dot(c, u)) / ty);
   }
@@ -138,8 +140,8 @@ void Camera::fit(const Frame& frame, float aspect, float margin) {
   const float zcap = std::max(frame.half_width_m, frame.half_length_m);
   zlo = std::max(zlo, -zcap);
   zhi = std::min(zhi, zcap);
-  fit_box({-frame.half_width_m, -frame.half_length_m, zlo},
-          {frame.half_width_m, frame.half_length_m, zhi}, aspect, margin);
+  fit_box({-frame.half_width_m, -frame.half_length_m, zlo}, {frame.half_width_m, frame.half_length_m, zhi}, aspect,
+          margin);
 }
 
 Camera fitted_camera(const Frame& frame, ViewPreset view, float aspect) {

@@ -15,9 +15,8 @@ constexpr float kTurbo[][3] = {{0.19f, 0.07f, 0.23f}, {0.27f, 0.44f, 0.92f}, {0.
                                {0.89f, 0.87f, 0.21f}, {0.99f, 0.65f, 0.15f}, {0.94f, 0.38f, 0.07f},
                                {0.78f, 0.16f, 0.02f}, {0.48f, 0.02f, 0.01f}};
 
-constexpr float kViridis[][3] = {{0.267f, 0.005f, 0.329f}, {0.253f, 0.265f, 0.530f},
-                                 {0.164f, 0.471f, 0.558f}, {0.135f, 0.659f, 0.518f},
-                                 {0.478f, 0.821f, 0.318f}, {0.993f, 0.906f, 0.144f}};
+constexpr float kViridis[][3] = {{0.267f, 0.005f, 0.329f}, {0.253f, 0.265f, 0.530f}, {0.164f, 0.471f, 0.558f},
+                                 {0.135f, 0.659f, 0.518f}, {0.478f, 0.821f, 0.318f}, {0.993f, 0.906f, 0.144f}};
 
 template <int N>
 Vec3 sample(const float (&table)[N][3], float t) {
@@ -25,8 +24,7 @@ Vec3 sample(const float (&table)[N][3], float t) {
   t = std::min(t, 1.0f) * (N - 1);
   const int i = std::min(static_cast<int>(t), N - 2);
   const float f = t - i;
-  return {table[i][0] + f * (table[i + 1][0] - table[i][0]),
-          table[i][1] + f * (table[i + 1][1] - table[i][1]),
+  return {table[i][0] + f * (table[i + 1][0] - table[i][0]), table[i][1] + f * (table[i + 1][1] - table[i][1]),
           table[i][2] + f * (table[i + 1][2] - table[i][2])};
 }
 

@@ -24,13 +24,11 @@ bool parse_frames_spec(const std::string& spec, RecorderOptions* o, std::string*
       return true;
     }
   }
-  if (error)
-    *error = "--frames: expected every=N (N time steps >= 1), final or none, got '" + spec + "'";
+  if (error) *error = "--frames: expected every=N (N time steps >= 1), final or none, got '" + spec + "'";
   return false;
 }
 
-std::unique_ptr<FrameRecorder> FrameRecorder::create(const RecorderOptions& options,
-                                                     std::string* error) {
+std::unique_ptr<FrameRecorder> FrameRecorder::create(const RecorderOptions& options, std::string* error) {
   std::unique_ptr<FrameRecorder> r(new FrameRecorder());
   r->options_ = options;
   if (options.vtk && options.mode == RecorderOptions::Mode::none) {
@@ -72,8 +70,7 @@ bool FrameRecorder::write(const Simulation& sim, std::string* error) {
   if (renderer_) {
     char name[64];
     std::snprintf(name, sizeof name, "/frames/frame_%05d.png", images_);
-    if (!renderer_->render_png(frame, options_.view, options_.width, options_.height,
-                               options_.dir + name, error))
+    if (!renderer_->render_png(frame, options_.view, options_.width, options_.height, options_.dir + name, error))
       return false;
     ++images_;
   }

@@ -13,11 +13,10 @@ bool load_gl(GlProcLoader loader, std::string* error) {
     if (error) *error = "could not load GL entry points (no current context?)";
     return false;
   }
-  if (GLAD_VERSION_MAJOR(version) < 3 ||
-      (GLAD_VERSION_MAJOR(version) == 3 && GLAD_VERSION_MINOR(version) < 3)) {
+  if (GLAD_VERSION_MAJOR(version) < 3 || (GLAD_VERSION_MAJOR(version) == 3 && GLAD_VERSION_MINOR(version) < 3)) {
     if (error)
-      *error = "OpenGL 3.3 needed, context gives " + std::to_string(GLAD_VERSION_MAJOR(version)) +
-               "." + std::to_string(GLAD_VERSION_MINOR(version));
+      *error = "OpenGL 3.3 needed, context gives " + std::to_string(GLAD_VERSION_MAJOR(version)) + "." +
+               std::to_string(GLAD_VERSION_MINOR(version));
     return false;
   }
   return true;

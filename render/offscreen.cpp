@@ -65,8 +65,7 @@ OffscreenContext::~OffscreenContext() {
   }
 }
 
-std::unique_ptr<OffscreenContext> OffscreenContext::create(int width, int height, int samples,
-                                                           std::string* error) {
+std::unique_ptr<OffscreenContext> OffscreenContext::create(int width, int height, int samples, std::string* error) {
   if (width <= 0 || height <= 0 || width > 16384 || height > 16384) {
     if (error) *error = "image size out of range (1..16384)";
     return nullptr;
@@ -109,16 +108,19 @@ bool OffscreenContext::resize(int width, int height) {
   return m.make_targets(nullptr);
 }
 
-int OffscreenContext::width() const { return impl_->width; }
-int OffscreenContext::height() const { return impl_->height; }
+int OffscreenContext::width() const {
+  return impl_->width;
+}
+int OffscreenContext::height() const {
+  return impl_->height;
+}
 
 std::vector<std::uint8_t> OffscreenContext::read_rgb() {
   Impl& m = *impl_;
   if (m.samples > 1) {
     glBindFramebuffer(GL_READ_FRAMEBUFFER, m.ms_fbo);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, m.fbo);
-    glBlitFramebuffer(0, 0, m.width, m.height, 0, 0, m.width, m.height, GL_COLOR_BUFFER_BIT,
-                      GL_NEAREST);
+    glBlitFramebuffer(0, 0, m.width, m.height, 0, 0, m.width, m.height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
   }
   glBindFramebuffer(GL_READ_FRAMEBUFFER, m.fbo);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
@@ -175,13 +177,10 @@ bool HeadlessRenderer::render(const Frame& frame, const ViewOptions& options, in
   return render(frame, camera, options, width, height, rgb, error);
 }
 
-bool HeadlessRenderer::render(const Frame& frame, const Camera& camera, const ViewOptions& options,
-                              int width, int height, std::vector<std::uint8_t>* rgb,
-                              std::string* error) {
+bool HeadlessRenderer::render(const Frame& frame, const Camera& camera, const ViewOptions& options, int width,
+                              int height, std::vector<std::uint8_t>* rgb, std::string* error) {
   if (!context_->resize(width, height)) {
-    if (error)
-      *error = "cannot make an offscreen image of " + std::to_string(width) + "x" +
-               std::to_string(height);
+    if (error) *error = "cannot make an offscreen image of " + std::to_string(width) + "x" + std::to_string(height);
     return false;
   }
   renderer_->draw(frame, camera, options, 0, 0, width, height);
@@ -194,19 +193,24 @@ bool HeadlessRenderer::render(const Frame& frame, const Camera& camera, const Vi
   return true;
 }
 
-bool HeadlessRenderer::render_png(const Frame& frame, const ViewOptions& options, int width,
-                                  int height, const std::string& path, std::string* error) {
+bool HeadlessRenderer::render_png(const Frame& frame, const ViewOptions& options, int width, int height,
+                                  const std::string& path, std::string* error) {
   std::vector<std::uint8_t> rgb;
-  return render(frame, options, width, height, &rgb, error) &&
-         write_png(path, width, height, rgb, error);
+  return render(frame, options, width, height, &rgb, error) && write_png(path, width, height, rgb, error);
 }
 
-OffscreenContext& HeadlessRenderer::context() { return *context_; }
-Renderer& HeadlessRenderer::renderer() { return *renderer_; }
-const DrawStats& HeadlessRenderer::stats() const { return renderer_->stats(); }
+OffscreenContext& HeadlessRenderer::context() {
+  return *context_;
+}
+Renderer& HeadlessRenderer::renderer() {
+  return *renderer_;
+}
+const DrawStats& HeadlessRenderer::stats() const {
+  return renderer_->stats();
+}
 
-bool render_frame_png(const Frame& frame, const ViewOptions& options, int width, int height,
-                      const std::string& path, std::string* error) {
+bool render_frame_png(const Frame& frame, const ViewOptions& options, int width, int height, const std::string& path,
+                      std::string* error) {
   auto h = HeadlessRenderer::create(error);
   return h && h->render_png(frame, options, width, height, path, error);
 }

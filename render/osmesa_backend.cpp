@@ -32,8 +32,7 @@ void destroy_context(void* context) {
 }
 
 bool make_current(void* context, void* buffer, int width, int height) {
-  return OSMesaMakeCurrent(static_cast<OSMesaContext>(context), buffer, GL_UNSIGNED_BYTE, width,
-                           height) == GL_TRUE;
+  return OSMesaMakeCurrent(static_cast<OSMesaContext>(context), buffer, GL_UNSIGNED_BYTE, width, height) == GL_TRUE;
 }
 
 void* get_proc_address(const char* name) {

@@ -75,8 +75,7 @@ struct Mesh {
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), nullptr);
     glEnableVertexAttribArray(1);
-    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                          reinterpret_cast<void*>(3 * sizeof(float)));
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<void*>(3 * sizeof(float)));
     glBindVertexArray(0);
     index_count = static_cast<GLsizei>(idx.size());
   }
@@ -94,8 +93,7 @@ void make_sphere(int slices, int stacks, std::vector<Vertex>* v, std::vector<std
     const float th = pi * j / stacks;  // from +z down
     for (int i = 0; i <= slices; ++i) {
       const float ph = 2 * pi * i / slices;
-      const float x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph),
-                  z = std::cos(th);
+      const float x = std::sin(th) * std::cos(ph), y = std::sin(th) * std::sin(ph), z = std::cos(th);
       v->push_back({x, y, z, x, y, z});
     }
   }
@@ -108,8 +106,7 @@ void make_sphere(int slices, int stacks, std::vector<Vertex>* v, std::vector<std
 
 // Unit-radius solid of revolution along +z from z = 0 to z = 1: a cylinder (tip_radius 1)
 // or a cone (tip_radius 0), with flat caps.
-void make_revolved(int slices, float tip_radius, std::vector<Vertex>* v,
-                   std::vector<std::uint32_t>* idx) {
+void make_revolved(int slices, float tip_radius, std::vector<Vertex>* v, std::vector<std::uint32_t>* idx) {
   const float pi = 3.14159265f;
   const float slope = 1.0f - tip_radius;  // radius drop per unit length
   const float nl = std::sqrt(1 + slope * slope);
@@ -205,9 +202,12 @@ float nice_ceil(float x) {
 
 const char* to_string(YarnGeometry g) {
   switch (g) {
-    case YarnGeometry::automatic: return "auto";
-    case YarnGeometry::tubes: return "tubes";
-    case YarnGeometry::ribbons: return "ribbons";
+    case YarnGeometry::automatic:
+      return "auto";
+    case YarnGeometry::tubes:
+      return "tubes";
+    case YarnGeometry::ribbons:
+      return "ribbons";
   }
   return "?";
 }
@@ -232,8 +232,7 @@ static float element_value(const Frame& f, ColorField field, std::size_t e) {
       if (a >= f.node_vel.size() || b >= f.node_vel.size()) return 0.0f;
       const auto& va = f.node_vel[a];
       const auto& vb = f.node_vel[b];
-      const float x = 0.5f * (va[0] + vb[0]), y = 0.5f * (va[1] + vb[1]),
-                  z = 0.5f * (va[2] + vb[2]);
+      const float x = 0.5f * (va[0] + vb[0]), y = 0.5f * (va[1] + vb[1]), z = 0.5f * (va[2] + vb[2]);
       return std::sqrt(x * x + y * y + z * z);
     }
     case ColorField::sliding:
@@ -284,8 +283,7 @@ std::vector<std::string> caption_lines(const Frame& frame, const ViewOptions& op
 // ---- Renderer ------------------------------------------------------------------------------
 
 struct Renderer::Impl {
-  GLuint bg_prog = 0, tube_prog = 0, ribbon_prog = 0, mesh_prog = 0, overlay_prog = 0,
-         upscale_prog = 0;
+  GLuint bg_prog = 0, tube_prog = 0, ribbon_prog = 0, mesh_prog = 0, overlay_prog = 0, upscale_prog = 0;
   GLuint empty_vao = 0;
   GLuint tube_vao = 0, ring_vbo = 0, ring_ebo = 0, inst_vbo = 0;
   int ring_sides = 0;
@@ -297,7 +295,7 @@ struct Renderer::Impl {
   int colormap_loaded = -1;
   Mesh sphere, cylinder, cone, box;
   std::vector<TubeInstance> instances;
-  std::vector<TubeInstance> uploaded;  // what inst_vbo holds
+  std::vector<TubeInstance> uploaded;   // what inst_vbo holds
   std::vector<std::int32_t> next_elem;  // level of detail: element leaving each node
   std::vector<std::uint8_t> merged;     // element already drawn by a merged instance
   // Low-resolution target for ViewOptions::render_scale < 1: colour + depth textures.
@@ -310,8 +308,8 @@ struct Renderer::Impl {
   void build_ring(int sides);
   void ensure_low_target(int w, int h);
   void load_colormap(ColorMap map);
-  void draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat,
-                 const Vec3& color, float shininess, float specular);
+  void draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat, const Vec3& color, float shininess,
+                 float specular);
   void draw_overlay(const Frame& frame, const ViewOptions& o, int w, int h);
 };
 
@@ -335,8 +333,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(TubeInstance), nullptr);
   glVertexAttribDivisor(1, 1);
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(TubeInstance),
-                        reinterpret_cast<void*>(4 * sizeof(float)));
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(TubeInstance), reinterpret_cast<void*>(4 * sizeof(float)));
   glVertexAttribDivisor(2, 1);
   glBindVertexArray(0);
   r.build_ring(8);
@@ -348,8 +345,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex),
-                        reinterpret_cast<void*>(2 * sizeof(float)));
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(OverlayVertex), reinterpret_cast<void*>(2 * sizeof(float)));
   glBindVertexArray(0);
 
   glGenTextures(1, &r.colormap_tex);
@@ -390,7 +386,9 @@ Renderer::~Renderer() {
   r.box.destroy();
 }
 
-const DrawStats& Renderer::stats() const { return impl_->stats; }
+const DrawStats& Renderer::stats() const {
+  return impl_->stats;
+}
 
 void Renderer::Impl::build_ring(int sides) {
   // Two rings of `sides` vertices (at node a and node b); quads between them.
@@ -404,10 +402,8 @@ void Renderer::Impl::build_ring(int sides) {
     }
   std::vector<std::uint16_t> idx;
   for (int i = 0; i < sides; ++i) {
-    const std::uint16_t a = static_cast<std::uint16_t>(i),
-                        b = static_cast<std::uint16_t>((i + 1) % sides);
-    const std::uint16_t c = static_cast<std::uint16_t>(a + sides),
-                        d = static_cast<std::uint16_t>(b + sides);
+    const std::uint16_t a = static_cast<std::uint16_t>(i), b = static_cast<std::uint16_t>((i + 1) % sides);
+    const std::uint16_t c = static_cast<std::uint16_t>(a + sides), d = static_cast<std::uint16_t>(b + sides);
     idx.insert(idx.end(), {a, c, b, b, c, d});
   }
   glBindVertexArray(tube_vao);
@@ -436,8 +432,7 @@ void Renderer::Impl::ensure_low_target(int w, int h) {
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glBindTexture(GL_TEXTURE_2D, low_depth);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, w, h, 0, GL_DEPTH_COMPONENT,
-               GL_UNSIGNED_INT, nullptr);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, w, h, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -461,8 +456,7 @@ void Renderer::Impl::load_colormap(ColorMap map) {
   for (int i = 0; i < n; ++i) {
     const Vec3 c = colormap(map, (i + 0.5f) / n);
     for (int k = 0; k < 3; ++k)
-      texels[3 * i + k] =
-          static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255));
+      texels[3 * i + k] = static_cast<std::uint8_t>(std::lround(std::clamp(c[k], 0.0f, 1.0f) * 255));
   }
   glBindTexture(GL_TEXTURE_2D, colormap_tex);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -474,8 +468,8 @@ void Renderer::Impl::load_colormap(ColorMap map) {
   colormap_loaded = static_cast<int>(map);
 }
 
-void Renderer::Impl::draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat,
-                               const Vec3& color, float shininess, float specular) {
+void Renderer::Impl::draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat, const Vec3& color,
+                               float shininess, float specular) {
   glUniformMatrix4fv(glGetUniformLocation(mesh_prog, "u_model"), 1, GL_FALSE, model.data());
   glUniformMatrix3fv(glGetUniformLocation(mesh_prog, "u_normal_matrix"), 1, GL_FALSE, nmat.data());
   glUniform3fv(glGetUniformLocation(mesh_prog, "u_color"), 1, color.data());
@@ -502,8 +496,7 @@ static float yarn_spacing(const Frame& f) {
   return len[len.size() / 2];
 }
 
-void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions& o, int x, int y,
-                    int w, int h) {
+void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions& o, int x, int y, int w, int h) {
   Impl& r = *impl_;
   r.stats = DrawStats{};
   if (w <= 0 || h <= 0) return;
@@ -553,8 +546,8 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
   const Vec3 key_dir = normalize(fwd * -0.75f + upv * 0.55f + rt * -0.35f);
   const Vec3 fill_dir = normalize(fwd * -0.5f + upv * -0.4f + rt * 0.6f);
   const bool cut = o.section_cut || o.view == ViewPreset::section;
-  const std::array<float, 4> clip = cut ? std::array<float, 4>{0, 1, 0, -frame.projectile_pos[1]}
-                                        : std::array<float, 4>{0, 0, 0, 1};
+  const std::array<float, 4> clip =
+      cut ? std::array<float, 4>{0, 1, 0, -frame.projectile_pos[1]} : std::array<float, 4>{0, 0, 0, 1};
 
   // Mirrored copies of the modelled part.
   std::vector<Vec3> mirrors = {{1, 1, 1}};
@@ -586,9 +579,8 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     const float thick = o.yarn_thickness_m > 0 ? o.yarn_thickness_m : frame.yarn_diameter_m;
     r.stats.yarn_width_m = width;
     r.stats.yarn_thickness_m = thick;
-    const float strain_scale = o.field == ColorField::strain && frame.failure_strain > 0
-                                   ? 1.0f / frame.failure_strain
-                                   : 1.0f;
+    const float strain_scale =
+        o.field == ColorField::strain && frame.failure_strain > 0 ? 1.0f / frame.failure_strain : 1.0f;
     const float inv_range = 1.0f / (hi - lo);
     const float max_stub = 0.5f * spacing;
 
@@ -601,13 +593,11 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       if (frame.elem_b[e] < r.intact.size()) r.intact[frame.elem_b[e]] = 1;
     }
     // Yarn width on screen at the camera target decides ribbons or tubes.
-    const float view_h_m =
-        2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180.0f);
+    const float view_h_m = 2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180.0f);
     const float px_per_m = view_h_m > 0 ? h / view_h_m : 0.0f;
     r.stats.yarn_width_px = width * px_per_m;
-    const bool ribbons =
-        o.yarn_geometry == YarnGeometry::ribbons ||
-        (o.yarn_geometry == YarnGeometry::automatic && r.stats.yarn_width_px < o.tube_min_px);
+    const bool ribbons = o.yarn_geometry == YarnGeometry::ribbons ||
+                         (o.yarn_geometry == YarnGeometry::automatic && r.stats.yarn_width_px < o.tube_min_px);
     r.stats.ribbons = ribbons;
     // Level of detail (ribbons only): two consecutive intact elements of a yarn become one
     // when their shared node lies within merge_px of the merged segment on screen and
@@ -644,8 +634,7 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       if (!broken) {
         const std::size_t n =
             merge_tol_m > 0 && r.next_elem[ib] >= 0 ? static_cast<std::size_t>(r.next_elem[ib]) : n_elem;
-        if (n > e && intact_elem(n) &&
-            (frame.elem_yarn.size() <= n || frame.elem_yarn[n] == frame.elem_yarn[e])) {
+        if (n > e && intact_elem(n) && (frame.elem_yarn.size() <= n || frame.elem_yarn[n] == frame.elem_yarn[e])) {
           const float tn = t_of(n);
           const auto& c = frame.node_pos[frame.elem_b[n]];
           const Vec3 pa{a[0], a[1], a[2]}, pb{b[0], b[1], b[2]}, pc{c[0], c[1], c[2]};
@@ -685,8 +674,7 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       glBufferData(GL_ARRAY_BUFFER, r.inst_capacity, nullptr, GL_DYNAMIC_DRAW);
       r.uploaded.clear();
     }
-    if (r.uploaded.size() != r.instances.size() ||
-        std::memcmp(r.uploaded.data(), r.instances.data(), bytes) != 0) {
+    if (r.uploaded.size() != r.instances.size() || std::memcmp(r.uploaded.data(), r.instances.data(), bytes) != 0) {
       glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, r.instances.data());
       r.uploaded = r.instances;
       r.stats.instances_uploaded = true;
@@ -773,8 +761,7 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     auto jaw = [&](float x0, float x1, float y0, float y1) {
       const Vec3 centre{0.5f * (x0 + x1), 0.5f * (y0 + y1), 0.0f};
       const Vec3 ax{0.5f * (x1 - x0), 0, 0}, ay{0, 0.5f * (y1 - y0), 0}, az{0, 0, hz};
-      r.draw_mesh(r.box, model_matrix(ax, ay, az, centre), normal_matrix(ax, ay, az), steel, 24.0f,
-                  0.35f);
+      r.draw_mesh(r.box, model_matrix(ax, ay, az, centre), normal_matrix(ax, ay, az), steel, 24.0f, 0.35f);
     };
     const float over = 0.12f * c;  // the jaw grips a strip of fabric
     if (frame.clamped_left) jaw(-W - c, -W + over, -L - 0.15f * c, L + 0.15f * c);
@@ -789,13 +776,11 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
     const Vec3 steel{0.55f, 0.57f, 0.62f};
     if (frame.projectile_shape == 0) {
       const Vec3 ax{R, 0, 0}, ay{0, R, 0}, az{0, 0, R};
-      r.draw_mesh(r.sphere, model_matrix(ax, ay, az, pos), normal_matrix(ax, ay, az), steel, 60.0f,
-                  0.8f);
+      r.draw_mesh(r.sphere, model_matrix(ax, ay, az, pos), normal_matrix(ax, ay, az), steel, 60.0f, 0.8f);
     } else {
       // Cylinder / cone: the mesh's +z is the flight direction, `pos` is the nose centre
       // (the point that meets the fabric first), the body trails behind it.
-      Vec3 k = normalize(
-          Vec3{frame.projectile_axis[0], frame.projectile_axis[1], frame.projectile_axis[2]});
+      Vec3 k = normalize(Vec3{frame.projectile_axis[0], frame.projectile_axis[1], frame.projectile_axis[2]});
       if (length(k) == 0) k = {0, 0, -1};
       const Vec3 helper = std::abs(k[0]) < 0.9f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
       const Vec3 i = normalize(cross(helper, k)), j = cross(k, i);
@@ -803,8 +788,8 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
       const Vec3 ax = i * R, ay = j * R, az = k * len;
       const bool cone = frame.projectile_shape == 2;
       // Cone mesh narrows towards +z: its tip leads, so the tip sits at pos.
-      r.draw_mesh(cone ? r.cone : r.cylinder, model_matrix(ax, ay, az, pos - az),
-                  normal_matrix(ax, ay, az), steel, 60.0f, 0.8f);
+      r.draw_mesh(cone ? r.cone : r.cylinder, model_matrix(ax, ay, az, pos - az), normal_matrix(ax, ay, az), steel,
+                  60.0f, 0.8f);
     }
   }
   glEnable(GL_CULL_FACE);
@@ -885,12 +870,10 @@ void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int 
     const float legend_y = y1 + 0.8f * line;
     overlay.rect(left, 2 * pad, right, legend_y + block(legend.size()) - pad, panel);
     for (std::size_t i = 0; i < title.size(); ++i)
-      overlay.text_shadowed(x1 - OverlayBatch::text_width(title[i], s), 3 * pad + i * line,
-                            title[i], s, white);
+      overlay.text_shadowed(x1 - OverlayBatch::text_width(title[i], s), 3 * pad + i * line, title[i], s, white);
     constexpr int steps = 64;
     for (int i = 0; i < steps; ++i) {  // top of the bar is the high end
-      const float t1 = 1.0f - static_cast<float>(i) / steps,
-                  t0 = 1.0f - static_cast<float>(i + 1) / steps;
+      const float t1 = 1.0f - static_cast<float>(i) / steps, t0 = 1.0f - static_cast<float>(i + 1) / steps;
       const Vec3 c1 = colormap(o.map, t1), c0 = colormap(o.map, t0);
       const Rgba a{c1[0], c1[1], c1[2], 1}, b{c0[0], c0[1], c0[2], 1};
       overlay.quad(x0, y0 + bar_h * i / steps, x1, y0 + bar_h * (i + 1) / steps, a, a, b, b);
@@ -898,13 +881,11 @@ void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int 
     for (int i = 0; i < ticks; ++i) {
       const float yy = y1 - bar_h * i / (ticks - 1);
       overlay.rect(x0 - 3 * s, yy - 0.5f * s, x0, yy + 0.5f * s, white);
-      overlay.text_shadowed(x0 - 5 * s - OverlayBatch::text_width(labels[i], s), yy - 3.5f * s,
-                            labels[i], s, white);
+      overlay.text_shadowed(x0 - 5 * s - OverlayBatch::text_width(labels[i], s), yy - 3.5f * s, labels[i], s, white);
     }
     // Warp / weft: the two shades the tubes use for a mid-range colour.
     const Vec3 mid = colormap(o.map, 0.5f);
-    const Rgba shade[2] = {{mid[0], mid[1], mid[2], 1},
-                           {mid[0] * 0.72f, mid[1] * 0.72f, mid[2] * 0.72f, 1}};
+    const Rgba shade[2] = {{mid[0], mid[1], mid[2], 1}, {mid[0] * 0.72f, mid[1] * 0.72f, mid[2] * 0.72f, 1}};
     for (int k = 0; k < 2; ++k) {
       const float ly = legend_y + k * line;
       const float tx = x1 - OverlayBatch::text_width(legend[k], s);
@@ -916,8 +897,7 @@ void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int 
   const auto& v = overlay.vertices();
   if (v.empty()) return;
   glUseProgram(overlay_prog);
-  glUniform2f(glGetUniformLocation(overlay_prog, "u_viewport"), static_cast<float>(w),
-              static_cast<float>(h));
+  glUniform2f(glGetUniformLocation(overlay_prog, "u_viewport"), static_cast<float>(w), static_cast<float>(h));
   glBindVertexArray(overlay_vao);
   glBindBuffer(GL_ARRAY_BUFFER, overlay_vbo);
   const std::size_t bytes = v.size() * sizeof(OverlayVertex);

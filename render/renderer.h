@@ -154,11 +154,11 @@ struct DrawStats {
   int broken_elements = 0;  // in the modelled part
   int mirror_copies = 1;    // 1, 2 or 4
   float yarn_width_m = 0, yarn_thickness_m = 0;
-  float range_min = 0, range_max = 0;  // colour range actually used
-  bool ribbons = false;        // yarns drawn as ribbons (else tubes)
-  float yarn_width_px = 0;     // yarn width on screen at the camera target
+  float range_min = 0, range_max = 0;       // colour range actually used
+  bool ribbons = false;                     // yarns drawn as ribbons (else tubes)
+  float yarn_width_px = 0;                  // yarn width on screen at the camera target
   int fabric_width = 0, fabric_height = 0;  // resolution the fabric was drawn at
-  bool instances_uploaded = false;  // false when the instance buffer already held them
+  bool instances_uploaded = false;          // false when the instance buffer already held them
 };
 
 // The colour range a field uses for a frame under `options`.
@@ -179,8 +179,7 @@ class Renderer {
 
   // Draw `frame` into the viewport (x, y, w, h) of the framebuffer currently bound, in
   // GL window coordinates (y up). Clears that rectangle (colour and depth) first.
-  void draw(const Frame& frame, const Camera& camera, const ViewOptions& options, int x, int y,
-            int w, int h);
+  void draw(const Frame& frame, const Camera& camera, const ViewOptions& options, int x, int y, int w, int h);
 
   const DrawStats& stats() const;
 
@@ -195,8 +194,7 @@ class Renderer {
 class OffscreenContext {
  public:
   // Returns nullptr (and says why) when OSMesa cannot give a 3.3+ core context.
-  static std::unique_ptr<OffscreenContext> create(int width, int height, int samples = 4,
-                                                  std::string* error = nullptr);
+  static std::unique_ptr<OffscreenContext> create(int width, int height, int samples = 4, std::string* error = nullptr);
   ~OffscreenContext();
   OffscreenContext(const OffscreenContext&) = delete;
   OffscreenContext& operator=(const OffscreenContext&) = delete;
@@ -225,13 +223,13 @@ class HeadlessRenderer {
   ~HeadlessRenderer();
 
   // Render with the preset camera of options.view fitted to the frame.
-  bool render(const Frame& frame, const ViewOptions& options, int width, int height,
-              std::vector<std::uint8_t>* rgb, std::string* error = nullptr);
+  bool render(const Frame& frame, const ViewOptions& options, int width, int height, std::vector<std::uint8_t>* rgb,
+              std::string* error = nullptr);
   // Render with a given camera.
-  bool render(const Frame& frame, const Camera& camera, const ViewOptions& options, int width,
-              int height, std::vector<std::uint8_t>* rgb, std::string* error = nullptr);
-  bool render_png(const Frame& frame, const ViewOptions& options, int width, int height,
-                  const std::string& path, std::string* error = nullptr);
+  bool render(const Frame& frame, const Camera& camera, const ViewOptions& options, int width, int height,
+              std::vector<std::uint8_t>* rgb, std::string* error = nullptr);
+  bool render_png(const Frame& frame, const ViewOptions& options, int width, int height, const std::string& path,
+                  std::string* error = nullptr);
 
   OffscreenContext& context();
   Renderer& renderer();
@@ -244,8 +242,8 @@ class HeadlessRenderer {
 };
 
 // One-shot helper: render `frame` offscreen and write a PNG atomically.
-bool render_frame_png(const Frame& frame, const ViewOptions& options, int width, int height,
-                      const std::string& path, std::string* error = nullptr);
+bool render_frame_png(const Frame& frame, const ViewOptions& options, int width, int height, const std::string& path,
+                      std::string* error = nullptr);
 
 // Write an RGB image (top row first) as PNG: to a temporary name in the same folder,
 // then renamed, so a reader never sees half a file.

@@ -8,8 +8,7 @@
 
 namespace ravel::render {
 
-void OverlayBatch::quad(float x0, float y0, float x1, float y1, Rgba tl, Rgba tr, Rgba br,
-                        Rgba bl) {
+void OverlayBatch::quad(float x0, float y0, float x1, float y1, Rgba tl, Rgba tr, Rgba br, Rgba bl) {
   const OverlayVertex a{x0, y0, tl.r, tl.g, tl.b, tl.a}, b{x1, y0, tr.r, tr.g, tr.b, tr.a},
       c{x1, y1, br.r, br.g, br.b, br.a}, d{x0, y1, bl.r, bl.g, bl.b, bl.a};
   vertices_.insert(vertices_.end(), {a, b, c, a, c, d});
@@ -22,8 +21,7 @@ void OverlayBatch::text(float x, float y, const std::string& s, float scale, Rgb
   std::vector<char> str(s.begin(), s.end());
   str.push_back('\0');
   unsigned char white[4] = {255, 255, 255, 255};
-  const int quads =
-      stb_easy_font_print(0, 0, str.data(), white, buffer.data(), static_cast<int>(buffer.size()));
+  const int quads = stb_easy_font_print(0, 0, str.data(), white, buffer.data(), static_cast<int>(buffer.size()));
   struct V {
     float x, y, z;
     unsigned char rgba[4];

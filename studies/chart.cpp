@@ -18,8 +18,8 @@
 namespace ravel::studies {
 
 Rgb palette(int i) {
-  static const Rgb colors[] = {{0, 114, 178},  {213, 94, 0},  {0, 158, 115}, {204, 121, 167}, {230, 159, 0},
-                               {86, 180, 233}, {120, 120, 120}, {0, 0, 0},   {160, 60, 60}};
+  static const Rgb colors[] = {{0, 114, 178},  {213, 94, 0},    {0, 158, 115}, {204, 121, 167}, {230, 159, 0},
+                               {86, 180, 233}, {120, 120, 120}, {0, 0, 0},     {160, 60, 60}};
   const int n = int(sizeof colors / sizeof colors[0]);
   return colors[((i % n) + n) % n];
 }
@@ -55,7 +55,9 @@ std::string tick_label(double v, double step) {
 
 namespace {
 // A value that can be drawn on the axis (finite; positive on a log axis).
-bool drawable(const Axis& a, double v) { return std::isfinite(v) && (!a.log || v > 0); }
+bool drawable(const Axis& a, double v) {
+  return std::isfinite(v) && (!a.log || v > 0);
+}
 }  // namespace
 
 int finite_point_count(const Chart& chart) {
@@ -207,8 +209,10 @@ void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double 
         p.text(cx0 + cw / 2, cy1 - ch / 2, g.cell_text[i], std::max(6.0, ts), lum < 140 ? white : ink, 1, false);
       }
     }
-  for (size_t xi = 0; xi < nx; ++xi) p.text(left + (xi + 0.5) * cw, bottom + 1.1 * fs, g.x_labels[xi], fs, ink, 1, false);
-  for (size_t yi = 0; yi < ny; ++yi) p.text(left - 0.7 * fs, bottom - (yi + 0.5) * ch, g.y_labels[yi], fs, ink, 2, false);
+  for (size_t xi = 0; xi < nx; ++xi)
+    p.text(left + (xi + 0.5) * cw, bottom + 1.1 * fs, g.x_labels[xi], fs, ink, 1, false);
+  for (size_t yi = 0; yi < ny; ++yi)
+    p.text(left - 0.7 * fs, bottom - (yi + 0.5) * ch, g.y_labels[yi], fs, ink, 2, false);
   p.text((left + right) / 2, bottom + 2.5 * fs, chart.x.title(), fs, ink, 1, false);
   p.text(X + 0.9 * fs, (top + bottom) / 2, chart.y.title(), fs, ink, 1, true);
   p.rect_outline(left, top, right, bottom, frame, 1);
@@ -331,11 +335,20 @@ std::string xml_escape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -416,7 +429,8 @@ std::string chart_svg(const Chart& chart, int width, int height) {
   SvgPainter p;
   p.out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
         << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
-        << "\" viewBox=\"0 0 " << width << " " << height << "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n"
+        << "\" viewBox=\"0 0 " << width << " " << height
+        << "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n"
         << "<title>" << xml_escape(chart.title) << "</title>\n";
   draw_chart(chart, p, 0, 0, width, height);
   p.out << "</svg>\n";

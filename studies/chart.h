@@ -17,20 +17,20 @@ using Rgb = std::array<unsigned char, 3>;
 enum class SeriesStyle { line, markers, line_markers };
 
 struct Series {
-  std::string name;                 // legend entry
-  std::vector<double> x, y;         // same length; non-finite points are skipped (a gap)
+  std::string name;          // legend entry
+  std::vector<double> x, y;  // same length; non-finite points are skipped (a gap)
   SeriesStyle style = SeriesStyle::line_markers;
-  int color = -1;                   // index into the palette; -1 = the series' position
+  int color = -1;  // index into the palette; -1 = the series' position
   bool dashed = false;
 };
 
 struct Axis {
-  std::string label;                // "impact velocity"
-  std::string unit;                 // "m/s" (shown as "impact velocity (m/s)")
-  bool fixed_range = false;         // false: from the data, padded to nice ticks
+  std::string label;         // "impact velocity"
+  std::string unit;          // "m/s" (shown as "impact velocity (m/s)")
+  bool fixed_range = false;  // false: from the data, padded to nice ticks
   double min = 0, max = 1;
-  bool include_zero = false;        // extend the data range to 0
-  bool log = false;                 // log10 scale: decade ticks; values <= 0 are skipped (a gap)
+  bool include_zero = false;  // extend the data range to 0
+  bool log = false;           // log10 scale: decade ticks; values <= 0 are skipped (a gap)
   std::string title() const { return unit.empty() ? label : label + " (" + unit + ")"; }
 };
 
@@ -50,11 +50,11 @@ struct Grid {
 
 struct Chart {
   std::string title;
-  std::string subtitle;             // e.g. the scene and what quick mode changed
+  std::string subtitle;  // e.g. the scene and what quick mode changed
   Axis x, y;
   std::vector<Series> series;
   bool legend = true;
-  Grid grid;                        // non-empty: a categorical grid chart
+  Grid grid;  // non-empty: a categorical grid chart
 };
 
 // Palette shared by every backend (colour-blind safe, Okabe-Ito order).

@@ -6,7 +6,9 @@ namespace ravel::studies {
 
 namespace {
 
-ImU32 to_u32(Rgb c) { return IM_COL32(c[0], c[1], c[2], 255); }
+ImU32 to_u32(Rgb c) {
+  return IM_COL32(c[0], c[1], c[2], 255);
+}
 
 class ImGuiPainter : public Painter {
  public:

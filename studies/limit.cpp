@@ -70,17 +70,22 @@ LambertJonas fit_lambert_jonas(const std::vector<double>& v_in, const std::vecto
         std::sort(o.begin(), o.end(), [&](int x, int y) { return fs[x] < fs[y]; });
         const auto b = s[o[0]], m = s[o[1]], w = s[o[2]];
         const double fb = fs[o[0]], fm = fs[o[1]], fw = fs[o[2]];
-        if (std::abs(fw - fb) <= 1e-14 * (1 + fb) && std::abs(w[0] - b[0]) < 1e-9 && std::abs(w[1] - b[1]) < 1e-9 * vmin)
+        if (std::abs(fw - fb) <= 1e-14 * (1 + fb) && std::abs(w[0] - b[0]) < 1e-9 &&
+            std::abs(w[1] - b[1]) < 1e-9 * vmin)
           break;
         const std::array<double, 2> c{(b[0] + m[0]) / 2, (b[1] + m[1]) / 2};
-        auto along = [&](double t) { return std::array<double, 2>{c[0] + t * (w[0] - c[0]), c[1] + t * (w[1] - c[1])}; };
+        auto along = [&](double t) {
+          return std::array<double, 2>{c[0] + t * (w[0] - c[0]), c[1] + t * (w[1] - c[1])};
+        };
         const auto r = along(-1);
         const double fr = f(r);
         if (fr < fb) {
           const auto e = along(-2);
           const double fe = f(e);
-          if (fe < fr) s[o[2]] = e, fs[o[2]] = fe;
-          else s[o[2]] = r, fs[o[2]] = fr;
+          if (fe < fr)
+            s[o[2]] = e, fs[o[2]] = fe;
+          else
+            s[o[2]] = r, fs[o[2]] = fr;
         } else if (fr < fm) {
           s[o[2]] = r, fs[o[2]] = fr;
         } else {
@@ -147,8 +152,10 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
     if (v < opt.min_mps || v > opt.max_mps) break;
     perf = fire(v, "bracket");
     if (failed) break;
-    if (perf) hi = hi < 0 ? v : std::min(hi, v);
-    else lo = std::max(lo, v);
+    if (perf)
+      hi = hi < 0 ? v : std::min(hi, v);
+    else
+      lo = std::max(lo, v);
   }
   if (lo < 0 || hi < 0) {
     if (!failed)
@@ -240,7 +247,8 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
                        const std::vector<std::string>& overrides) {
   nlohmann::ordered_json j;
-  j["ballistic_limit_mps"] = r.bracketed ? nlohmann::ordered_json(r.ballistic_limit_mps) : nlohmann::ordered_json(nullptr);
+  j["ballistic_limit_mps"] =
+      r.bracketed ? nlohmann::ordered_json(r.ballistic_limit_mps) : nlohmann::ordered_json(nullptr);
   auto end = [](double v) { return v >= 0 ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
   j["bracket_mps"] = {end(r.lo_mps), end(r.hi_mps)};
   j["bracket_note"] = "lo: highest velocity that did not perforate; hi: lowest that perforated";
@@ -265,7 +273,8 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
     q["perforated"] = s.perforated;
     q["residual_velocity_mps"] = s.residual_velocity_mps;
     q["energy_absorbed_J"] = s.energy_absorbed_J;
-    q["perforation_time_s"] = s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
+    q["perforation_time_s"] =
+        s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
     q["end_reason"] = s.end_reason;
     q["decided"] = s.decided;
     q["failed"] = s.failed;

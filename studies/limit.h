@@ -22,21 +22,21 @@ struct Shot {
   double residual_velocity_mps = 0;
   double energy_absorbed_J = 0;
   double perforation_time_s = -1;
-  std::string end_reason;       // perforated | rebounded | end_time | ...
-  bool decided = true;          // false: reached end_time neither perforated nor turned back
+  std::string end_reason;  // perforated | rebounded | end_time | ...
+  bool decided = true;     // false: reached end_time neither perforated nor turned back
   double wall_time_s = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
-  std::string purpose;          // bracket | bisect | fit
-  bool failed = false;          // the run diverged: its outcome means nothing
-  std::string error;            // why
+  std::string purpose;  // bracket | bisect | fit
+  bool failed = false;  // the run diverged: its outcome means nothing
+  std::string error;    // why
 };
 
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
 
 struct LimitOptions {
-  double start_mps = 100;       // first velocity tried
-  double growth = 1.5;          // bracketing factor
-  double tolerance_mps = 1.0;   // stop when hi - lo <= tolerance
+  double start_mps = 100;      // first velocity tried
+  double growth = 1.5;         // bracketing factor
+  double tolerance_mps = 1.0;  // stop when hi - lo <= tolerance
   double min_mps = 1, max_mps = 3000;
   int max_runs = 60;
   std::vector<double> fit_factors{1.25, 1.6, 2.2, 3.0};  // extra runs at BL x factor for the fit
@@ -45,7 +45,7 @@ struct LimitOptions {
 struct LambertJonas {
   bool ok = false;
   double a = 1, p = 2, vbl_mps = 0;
-  double rms_mps = 0;           // root-mean-square residual of the fit
+  double rms_mps = 0;  // root-mean-square residual of the fit
   int points = 0;
   std::string note;
   double residual_at(double v) const;
@@ -58,10 +58,10 @@ LambertJonas fit_lambert_jonas(const std::vector<double>& v, const std::vector<d
 
 struct LimitResult {
   bool bracketed = false, converged = false;
-  double lo_mps = 0;            // highest velocity that did not perforate
-  double hi_mps = 0;            // lowest velocity that perforated
+  double lo_mps = 0;               // highest velocity that did not perforate
+  double hi_mps = 0;               // lowest velocity that perforated
   double ballistic_limit_mps = 0;  // (lo + hi) / 2, within tolerance / 2 of either end
-  std::vector<Shot> runs;       // every run, in order
+  std::vector<Shot> runs;          // every run, in order
   LambertJonas fit;
   std::vector<std::string> warnings;
   double wall_time_s = 0;
@@ -74,8 +74,7 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
 // run comes back with failed = true (the search stops there: a bracket built on it would
 // be meaningless); an interrupted one throws std::runtime_error.
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
-                      const std::atomic<bool>* interrupt = nullptr,
-                      std::function<void(const Simulation&)> on_run = {});
+                      const std::atomic<bool>* interrupt = nullptr, std::function<void(const Simulation&)> on_run = {});
 
 // limit.json: the result, the fit, every run, and what was run.
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,

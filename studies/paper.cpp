@@ -28,7 +28,9 @@ std::string num(double v, const char* f = "%g") {
   std::snprintf(b, sizeof b, f, v);
   return b;
 }
-bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a)); }
+bool same(double a, double b) {
+  return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a));
+}
 double to_d(const std::string& s) {
   if (s.empty()) return NAN;
   if (s == "true") return 1;
@@ -50,15 +52,15 @@ struct VelocityRow {
 };
 
 struct LimitEntry {
-  std::string label;           // "mu=0.2" / "pin-jointed"
-  double mu = NAN;             // NaN for pin-jointed
+  std::string label;  // "mu=0.2" / "pin-jointed"
+  double mu = NAN;    // NaN for pin-jointed
   std::vector<std::string> overrides;
   std::string dir;
   LimitResult result;
   bool have = false;
   std::string error;
   bool keep_frame = false;
-  Frame frame;                 // lowest perforating run's final frame
+  Frame frame;  // lowest perforating run's final frame
   double frame_v = INFINITY;
 };
 
@@ -163,7 +165,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   auto add_case = [&](double mu, double failure, double v) {
     Case c;
     c.index = int(cases.size());
-    c.settings = {{"yarn.friction", num(mu)}, {"yarn.failure_strain", num(failure)}, {"projectile.velocity_mps", num(v)}};
+    c.settings = {
+        {"yarn.friction", num(mu)}, {"yarn.failure_strain", num(failure)}, {"projectile.velocity_mps", num(v)}};
     cases.push_back(c);
   };
   for (double mu : plan.frictions)
@@ -295,7 +298,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     for (int j = 0; j < std::max(1, std::min<int>(opt.jobs, int(limits.size()))); ++j) pool.emplace_back(worker);
     for (auto& t : pool) t.join();
   }
-  if (interrupt && interrupt->load()) throw std::runtime_error("interrupted during the ballistic-limit searches (rerun to resume)");
+  if (interrupt && interrupt->load())
+    throw std::runtime_error("interrupted during the ballistic-limit searches (rerun to resume)");
   for (const auto& e : limits) {
     if (!e.error.empty()) result.warnings.push_back("ballistic limit " + e.label + ": " + e.error);
     for (const auto& w : e.result.warnings) result.warnings.push_back("ballistic limit " + e.label + ": " + w);
@@ -335,9 +339,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   };
   for (double v : plan.image_velocities_mps) {
     auto it = image_frames.find(v);
-    image("images/perforation_" + num(v) + "mps_mu0.2.png",
-          "mu = 0.2 at " + num(v) + " m/s, end of run (Fig. 8 / 12)", it == image_frames.end() ? nullptr : &it->second,
-          [&] {
+    image("images/perforation_" + num(v) + "mps_mu0.2.png", "mu = 0.2 at " + num(v) + " m/s, end of run (Fig. 8 / 12)",
+          it == image_frames.end() ? nullptr : &it->second, [&] {
             auto ov = plan.velocity_overrides;
             for (const auto& o : {"yarn.friction=0.2", "yarn.failure_strain=0.052"}) ov.push_back(o);
             ov.push_back("projectile.velocity_mps=" + num(v));
@@ -347,16 +350,16 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   }
   for (const auto& e : limits) {
     if (!e.keep_frame || !e.have || !e.result.bracketed) continue;
-    image("images/perforation_BL_" + e.label + ".png",
-          e.label + " at " + num(e.result.hi_mps, "%.1f") + " m/s, the lowest perforating run of the BL search (Fig. 17)",
-          std::isfinite(e.frame_v) && same(e.frame_v, e.result.hi_mps) ? &e.frame : nullptr,
-          [&] {
-            auto ov = plan.limit_overrides;
-            ov.push_back(e.overrides[0]);
-            ov.push_back("projectile.velocity_mps=" + num(e.result.hi_mps, "%.6f"));
-            ov.push_back("solver.end_time_us=" + num(plan.limit_end_time_us));
-            return ov;
-          }());
+    image(
+        "images/perforation_BL_" + e.label + ".png",
+        e.label + " at " + num(e.result.hi_mps, "%.1f") + " m/s, the lowest perforating run of the BL search (Fig. 17)",
+        std::isfinite(e.frame_v) && same(e.frame_v, e.result.hi_mps) ? &e.frame : nullptr, [&] {
+          auto ov = plan.limit_overrides;
+          ov.push_back(e.overrides[0]);
+          ov.push_back("projectile.velocity_mps=" + num(e.result.hi_mps, "%.6f"));
+          ov.push_back("solver.end_time_us=" + num(plan.limit_end_time_us));
+          return ov;
+        }());
   }
   const double image_wall_s = since(ti);
 
@@ -388,8 +391,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.x = {"impact velocity", "m/s"};
     c.y = {"energy absorbed", "J"};
     c.y.include_zero = true;
-    for (double f : plan.failure_strains) c.series.push_back(energy_series(kReferenceFriction, f, "failure strain " + num(f * 100) + " %"));
-    put(c, "fig11_energy_vs_velocity_failure_strain", "Energy absorbed vs impact velocity for two failure strains (Fig. 11)");
+    for (double f : plan.failure_strains)
+      c.series.push_back(energy_series(kReferenceFriction, f, "failure strain " + num(f * 100) + " %"));
+    put(c, "fig11_energy_vs_velocity_failure_strain",
+        "Energy absorbed vs impact velocity for two failure strains (Fig. 11)");
   }
   {
     Chart c;
@@ -399,7 +404,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.y = {"energy absorbed", "J"};
     c.y.include_zero = true;
     for (double mu : plan.frictions) c.series.push_back(energy_series(mu, kDefaultFailure, "mu = " + num(mu)));
-    put(c, "fig13_energy_vs_velocity_friction", "Energy absorbed vs impact velocity for each yarn-yarn friction (Fig. 13)");
+    put(c, "fig13_energy_vs_velocity_friction",
+        "Energy absorbed vs impact velocity for each yarn-yarn friction (Fig. 13)");
   }
   // Histories at the history velocity.
   std::map<double, Csv> histories;
@@ -424,8 +430,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.subtitle = sub;
     c.x = {"time", "us"};
     c.y = {"projectile velocity", "m/s"};
-    for (const auto& [mu, h] : histories) c.series.push_back(history_series(h, "projectile_velocity_mps", "mu = " + num(mu)));
-    put(c, "fig14_velocity_history", "Projectile velocity histories at " + num(plan.history_velocity_mps) + " m/s (Fig. 14)");
+    for (const auto& [mu, h] : histories)
+      c.series.push_back(history_series(h, "projectile_velocity_mps", "mu = " + num(mu)));
+    put(c, "fig14_velocity_history",
+        "Projectile velocity histories at " + num(plan.history_velocity_mps) + " m/s (Fig. 14)");
   }
   if (histories.count(kReferenceFriction)) {
     const Csv& h = histories[kReferenceFriction];
@@ -501,7 +509,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     }
     if (s.y.size() >= 3) {
       if (worst < 0) {
-        c.ravel = "mu = 0.2: energy absorbed never falls with velocity over " + num(s.x.front()) + "-" + num(s.x.back()) + " m/s";
+        c.ravel = "mu = 0.2: energy absorbed never falls with velocity over " + num(s.x.front()) + "-" +
+                  num(s.x.back()) + " m/s";
         c.verdict = "differs";
       } else {
         const double rel = -worst_drop / std::max(1e-12, s.y[size_t(worst)]);
@@ -526,8 +535,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
           if (r->energy_J > emax) emax = r->energy_J, mu_max = mu;
       if (std::isnan(mu_max)) continue;
       ++n;
-      if (same(mu_max, kReferenceFriction)) ++best;
-      else others += (others.empty() ? "" : ", ") + num(v) + " m/s: mu = " + num(mu_max);
+      if (same(mu_max, kReferenceFriction))
+        ++best;
+      else
+        others += (others.empty() ? "" : ", ") + num(v) + " m/s: mu = " + num(mu_max);
     }
     if (n > 0) {
       c.ravel = "mu = 0.2 is highest at " + std::to_string(best) + " of " + std::to_string(n) + " velocities" +
@@ -549,7 +560,9 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
       d.ravel = "mean over velocities: " + num(e0, "%.1f") + " J (mu 0), " + num(e6, "%.1f") + " J (0.06), " +
                 num(e2, "%.1f") + " J (0.2), " + num(e10, "%.1f") + " J (1.0); slope " + num(rise, "%.0f") +
                 " J per unit mu below 0.06, " + num(-fall, "%.0f") + " above 0.2";
-      d.verdict = rise > 0 && fall > 0 && rise > 3 * fall ? "agrees" : rise > 0 && rise > 3 * std::abs(fall) ? "partly" : "differs";
+      d.verdict = rise > 0 && fall > 0 && rise > 3 * fall ? "agrees"
+                  : rise > 0 && rise > 3 * std::abs(fall) ? "partly"
+                                                          : "differs";
     }
     claims.push_back(d);
   }
@@ -605,11 +618,15 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     claims.push_back(c);
   }
   {  // 5. ballistic limits
-    auto bl = [&](double mu) { const LimitEntry* e = bl_of(mu); return e ? e->result.ballistic_limit_mps : NAN; };
+    auto bl = [&](double mu) {
+      const LimitEntry* e = bl_of(mu);
+      return e ? e->result.ballistic_limit_mps : NAN;
+    };
     const double tol = plan.limit_tolerance_mps;
     Claim a{"16", "BL is about 70 m/s for mu = 0.2 and 71 m/s for mu = 0.1.", "", "not measured"};
     if (std::isfinite(bl(0.2)) && std::isfinite(bl(0.1))) {
-      a.ravel = "BL " + num(bl(0.2), "%.1f") + " m/s (mu 0.2), " + num(bl(0.1), "%.1f") + " m/s (mu 0.1), +- " + num(tol / 2) + " m/s";
+      a.ravel = "BL " + num(bl(0.2), "%.1f") + " m/s (mu 0.2), " + num(bl(0.1), "%.1f") + " m/s (mu 0.1), +- " +
+                num(tol / 2) + " m/s";
       const bool ok2 = std::abs(bl(0.2) - 70) <= 0.1 * 70, ok1 = std::abs(bl(0.1) - 71) <= 0.1 * 71;
       a.verdict = ok2 && ok1 ? "agrees" : ok2 || ok1 ? "partly" : "differs";
     }
@@ -617,7 +634,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     Claim b{"16", "BL(mu = 0) is about half of BL(mu = 0.1).", "", "not measured"};
     if (std::isfinite(bl(0)) && std::isfinite(bl(0.1))) {
       const double r = bl(0) / bl(0.1);
-      b.ravel = "BL(0) / BL(0.1) = " + num(r, "%.2f") + " (" + num(bl(0), "%.1f") + " / " + num(bl(0.1), "%.1f") + " m/s)";
+      b.ravel =
+          "BL(0) / BL(0.1) = " + num(r, "%.2f") + " (" + num(bl(0), "%.1f") + " / " + num(bl(0.1), "%.1f") + " m/s)";
       b.verdict = r >= 0.4 && r <= 0.6 ? "agrees" : r < 0.8 ? "partly" : "differs";
     }
     claims.push_back(b);
@@ -636,32 +654,38 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     Claim d{"16", "The pin-jointed model's BL is also below that of mu = 0.2.", "", "not measured"};
     for (const auto& e : limits)
       if (std::isnan(e.mu) && !pin_entry)
-        d.ravel = "no ballistic limit found for the pin-jointed model: " +
-                  (!e.error.empty() ? e.error : !e.result.warnings.empty() ? e.result.warnings.front() : "no bracket");
+        d.ravel = "no ballistic limit found for the pin-jointed model: " + (!e.error.empty() ? e.error
+                                                                            : !e.result.warnings.empty()
+                                                                                ? e.result.warnings.front()
+                                                                                : "no bracket");
     if (pin_entry && std::isfinite(bl(0.2))) {
       d.ravel = "pin-jointed " + num(pin_entry->result.ballistic_limit_mps, "%.1f") + " m/s (bracket " +
                 num(pin_entry->result.lo_mps, "%.1f") + "-" + num(pin_entry->result.hi_mps, "%.1f") +
-                (pin_entry->result.converged ? "" : ", not converged") + ") vs " + num(bl(0.2), "%.1f") + " m/s (mu 0.2)";
+                (pin_entry->result.converged ? "" : ", not converged") + ") vs " + num(bl(0.2), "%.1f") +
+                " m/s (mu 0.2)";
       d.verdict = pin_entry->result.ballistic_limit_mps < bl(0.2) - tol ? "agrees"
                   : pin_entry->result.ballistic_limit_mps < bl(0.2)     ? "partly"
-                                                                         : "differs";
+                                                                        : "differs";
     }
     claims.push_back(d);
   }
   {  // 6. perforation shapes
-    Claim a{"8, 12", "At 200 m/s perforation is slit-like: clamped (weft) yarns break, unclamped (warp) yarns slide off.", "",
+    Claim a{"8, 12",
+            "At 200 m/s perforation is slit-like: clamped (weft) yarns break, unclamped (warp) yarns slide off.", "",
             "not measured"};
     if (const VelocityRow* r = find_row(0.2, kDefaultFailure, 200)) {
       a.ravel = "broken yarns: " + std::to_string(r->broken_weft_yarns) + " weft (clamped), " +
                 std::to_string(r->broken_warp_yarns) + " warp (free)";
       a.verdict = r->broken_weft_yarns > 0 && r->broken_warp_yarns * 3 <= r->broken_weft_yarns ? "agrees"
-                  : r->broken_warp_yarns < r->broken_weft_yarns                                 ? "partly"
-                                                                                                : "differs";
+                  : r->broken_warp_yarns < r->broken_weft_yarns                                ? "partly"
+                                                                                               : "differs";
     }
     claims.push_back(a);
-    Claim b{"12", "At 360-400 m/s perforation is square (equal counts of broken warp and weft yarns).", "", "not measured"};
+    Claim b{"12", "At 360-400 m/s perforation is square (equal counts of broken warp and weft yarns).", "",
+            "not measured"};
     if (const VelocityRow* r = find_row(0.2, kDefaultFailure, 360)) {
-      b.ravel = "broken yarns: " + std::to_string(r->broken_weft_yarns) + " weft, " + std::to_string(r->broken_warp_yarns) + " warp";
+      b.ravel = "broken yarns: " + std::to_string(r->broken_weft_yarns) + " weft, " +
+                std::to_string(r->broken_warp_yarns) + " warp";
       const double ratio = r->broken_weft_yarns > 0 ? double(r->broken_warp_yarns) / r->broken_weft_yarns : 0;
       b.verdict = ratio >= 0.7 && ratio <= 1.4 ? "agrees" : ratio >= 0.4 && ratio <= 2.5 ? "partly" : "differs";
     }
@@ -670,19 +694,23 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     if (const LimitEntry* e = bl_of(0.02)) {
       for (const auto& s : e->result.runs)
         if (s.perforated && same(s.velocity_mps, e->result.hi_mps)) {
-          c.ravel = "lowest perforating run (" + num(s.velocity_mps, "%.1f") + " m/s): " +
-                    std::to_string(s.broken_weft_yarns) + " weft and " + std::to_string(s.broken_warp_yarns) +
-                    " warp yarns broken";
+          c.ravel = "lowest perforating run (" + num(s.velocity_mps, "%.1f") +
+                    " m/s): " + std::to_string(s.broken_weft_yarns) + " weft and " +
+                    std::to_string(s.broken_warp_yarns) + " warp yarns broken";
           c.verdict = s.broken_weft_yarns + s.broken_warp_yarns == 0 ? "agrees" : "differs";
         }
     }
     claims.push_back(c);
   }
   for (const auto& c : claims) {
-    if (c.verdict == "agrees") ++result.claims_agree;
-    else if (c.verdict == "partly") ++result.claims_partly;
-    else if (c.verdict == "differs") ++result.claims_differ;
-    else ++result.claims_unknown;
+    if (c.verdict == "agrees")
+      ++result.claims_agree;
+    else if (c.verdict == "partly")
+      ++result.claims_partly;
+    else if (c.verdict == "differs")
+      ++result.claims_differ;
+    else
+      ++result.claims_unknown;
   }
 
   // ------------------------------------------------------------------ report.md
@@ -691,7 +719,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   result.runs_per_hour = result.wall_time_s > 0 ? result.runs / (result.wall_time_s / 3600) : 0;
   std::ostringstream md;
   md << "# ravel: the paper's studies reproduced\n\n"
-     << "Zeng, Tan & Shim, *Modelling inter-yarn friction in woven fabric armour* (SPEC §9), rerun with ravel's default "
+     << "Zeng, Tan & Shim, *Modelling inter-yarn friction in woven fabric armour* (SPEC §9), rerun with ravel's "
+        "default "
         "scene (`"
      << base_scene.name << "`, " << (base_scene.source.empty() ? "built-in" : base_scene.source) << ").\n\n"
      << "- Mode: **" << (plan.quick ? "quick" : "full") << "**: " << plan.description << ".\n";
@@ -701,15 +730,16 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
           "larger stable step), to a 4 m/s tolerance, for 6 friction values instead of 9. The velocity studies "
           "(Fig. 8, 11-15) use the full mesh: coarsening them roughly doubles the energy absorbed at 260 m/s and "
           "multiplies the friction work by more than ten (measured at 260 m/s, mu = 0.2: 75 J absorbed and 41 J of "
-          "friction work coarsened, 36 J and 2.8 J on the full mesh). The coarsened BL numbers (Fig. 16, 17) are a preview; run "
+          "friction work coarsened, 36 J and 2.8 J on the full mesh). The coarsened BL numbers (Fig. 16, 17) are a "
+          "preview; run "
           "without `--quick` for the model's answer.\n";
   if (!opt.overrides.empty()) {
     md << "- User overrides:";
     for (const auto& o : opt.overrides) md << " `" << o << "`";
     md << "\n";
   }
-  md << "- Velocity runs end at perforation, rebound or " << num(plan.velocity_end_time_us) << " us; ballistic-limit runs at "
-     << num(plan.limit_end_time_us) << " us.\n";
+  md << "- Velocity runs end at perforation, rebound or " << num(plan.velocity_end_time_us)
+     << " us; ballistic-limit runs at " << num(plan.limit_end_time_us) << " us.\n";
   md << "- Wall time " << num(result.wall_time_s, "%.0f") << " s for " << result.runs << " runs made now ("
      << num(result.runs_per_hour, "%.0f") << " runs per hour, " << opt.jobs << " jobs); velocity sweep "
      << num(velocity_wall_s, "%.0f") << " s (" << vrep.cases_run << " run, " << vrep.cases_skipped << " resumed, "
@@ -729,13 +759,14 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
 
   md << "## The paper's statements beside ravel's numbers\n\n"
      << "Verdicts use stated thresholds (below the table) and are computed, not chosen: " << result.claims_agree
-     << " agree, " << result.claims_partly << " partly, " << result.claims_differ << " differ, " << result.claims_unknown
-     << " not measured.\n\n"
+     << " agree, " << result.claims_partly << " partly, " << result.claims_differ << " differ, "
+     << result.claims_unknown << " not measured.\n\n"
      << "| Fig. | the paper | ravel (this run) | verdict |\n|---|---|---|---|\n";
   for (const auto& c : claims)
     md << "| " << c.figure << " | " << c.paper << " | " << (c.ravel.empty() ? "(no data)" : c.ravel) << " | **"
        << c.verdict << "** |\n";
-  md << "\nThresholds: drop = largest fall between neighbouring velocities, *agrees* if it lies between 220 and 280 m/s "
+  md << "\nThresholds: drop = largest fall between neighbouring velocities, *agrees* if it lies between 220 and 280 "
+        "m/s "
         "and is at least 15 %; mu = 0.2 highest at every velocity (*partly*: at least half); steep rise = mean slope "
         "below mu = 0.06 more than 3x the mean fall above 0.2; perforation time within 15 us of 73 us and earlier than "
         "mu = 0.2; gentle = less than half the velocity lost at mu = 0.2; friction work within a factor 3 of 1 J; BL "
@@ -747,7 +778,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     md << "### " << caption << "\n\n![" << caption << "](" << stem << ".png)\n\n[SVG](" << stem << ".svg) · [CSV]("
        << stem << ".csv)\n\n";
 
-  md << "## Ballistic limits\n\n| model | BL (m/s) | bracket (m/s) | runs | search wall time (s) |\n|---|---|---|---|---|\n";
+  md << "## Ballistic limits\n\n| model | BL (m/s) | bracket (m/s) | runs | search wall time (s) "
+        "|\n|---|---|---|---|---|\n";
   for (const auto& e : limits) {
     std::string lab = e.label;
     for (char& ch : lab)
@@ -758,7 +790,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
          << num(e.result.hi_mps, "%.1f") << (e.result.converged ? "" : " (not converged: see warnings)") << " | "
          << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " |\n";
     else
-      md << "not found: " << (!e.error.empty() ? e.error : !e.result.warnings.empty() ? e.result.warnings.front() : "")
+      md << "not found: "
+         << (!e.error.empty()             ? e.error
+             : !e.result.warnings.empty() ? e.result.warnings.front()
+                                          : "")
          << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " |\n";
   }
   md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did).\n\n";

@@ -17,26 +17,26 @@ namespace ravel::studies {
 
 struct PaperPlan {
   bool quick = false;
-  std::vector<double> velocities_mps;          // Fig. 11, 13
-  std::vector<double> frictions;               // Fig. 13, 14
-  std::vector<double> failure_strains;         // Fig. 11 (at mu = 0.2)
-  std::vector<double> limit_frictions;         // Fig. 16 (plus the pin-jointed model)
-  std::vector<double> image_velocities_mps;    // Fig. 8, 12 (at mu = 0.2)
-  std::vector<double> image_limit_frictions;   // Fig. 17: images at the BL
-  double history_velocity_mps = 260;           // Fig. 14, 15
+  std::vector<double> velocities_mps;         // Fig. 11, 13
+  std::vector<double> frictions;              // Fig. 13, 14
+  std::vector<double> failure_strains;        // Fig. 11 (at mu = 0.2)
+  std::vector<double> limit_frictions;        // Fig. 16 (plus the pin-jointed model)
+  std::vector<double> image_velocities_mps;   // Fig. 8, 12 (at mu = 0.2)
+  std::vector<double> image_limit_frictions;  // Fig. 17: images at the BL
+  double history_velocity_mps = 260;          // Fig. 14, 15
   double limit_tolerance_mps = 1;
   double velocity_end_time_us = 400;
   double limit_end_time_us = 3000;
-  std::vector<std::string> velocity_overrides; // what quick mode changes for Fig. 8, 11-15
-  std::vector<std::string> limit_overrides;    // ... and for the BL searches (Fig. 16, 17)
-  std::string description;                     // one line for charts and the report
+  std::vector<std::string> velocity_overrides;  // what quick mode changes for Fig. 8, 11-15
+  std::vector<std::string> limit_overrides;     // ... and for the BL searches (Fig. 16, 17)
+  std::string description;                      // one line for charts and the report
 };
 
 PaperPlan paper_plan(bool quick);
 
 struct PaperOptions {
-  std::string scene_path;                      // resolved path of the base scene
-  std::vector<std::string> overrides;          // user --set, applied before the plan's
+  std::string scene_path;              // resolved path of the base scene
+  std::vector<std::string> overrides;  // user --set, applied before the plan's
   std::string out_dir;
   int jobs = 1;
   bool quick = false;

@@ -50,16 +50,16 @@ std::vector<StabilityMapSpec> default_stability_maps(bool quick) {
   StabilityMapSpec dt;
   dt.name = "dt_factor";
   dt.title = "Time-step factor, per contact model";
-  dt.x = {"solver.dt_factor", quick ? std::vector<std::string>{"0.25", "0.5", "0.9", "1.1", "1.5", "2"}
-                                    : std::vector<std::string>{"0.1", "0.25", "0.5", "0.75", "0.9", "1", "1.1",
-                                                               "1.25", "1.5", "2"}};
+  dt.x = {"solver.dt_factor",
+          quick ? std::vector<std::string>{"0.25", "0.5", "0.9", "1.1", "1.5", "2"}
+                : std::vector<std::string>{"0.1", "0.25", "0.5", "0.75", "0.9", "1", "1.1", "1.25", "1.5", "2"}};
   dt.y = {"solver.model", {"sliding", "pin_jointed"}};
   m.push_back(dt);
   StabilityMapSpec fr;
   fr.name = "friction";
   fr.title = "Contact iterations at high friction (sliding)";
-  fr.x = {"solver.contact_iterations", quick ? std::vector<std::string>{"1", "2", "8"}
-                                             : std::vector<std::string>{"1", "2", "4", "8"}};
+  fr.x = {"solver.contact_iterations",
+          quick ? std::vector<std::string>{"1", "2", "8"} : std::vector<std::string>{"1", "2", "4", "8"}};
   fr.y = {"yarn.friction", {"0.2", "1", "10"}};
   fr.fixed = {"solver.model=sliding"};
   m.push_back(fr);
@@ -68,8 +68,8 @@ std::vector<StabilityMapSpec> default_stability_maps(bool quick) {
   v.title = "Impact velocity and time-step factor (sliding)";
   v.x = {"projectile.velocity_mps", quick ? std::vector<std::string>{"200", "600", "1000"}
                                           : std::vector<std::string>{"200", "400", "600", "800", "1000"}};
-  v.y = {"solver.dt_factor", quick ? std::vector<std::string>{"0.5", "0.9"}
-                                   : std::vector<std::string>{"0.25", "0.5", "0.9"}};
+  v.y = {"solver.dt_factor",
+         quick ? std::vector<std::string>{"0.5", "0.9"} : std::vector<std::string>{"0.25", "0.5", "0.9"}};
   v.fixed = {"solver.model=sliding"};
   m.push_back(v);
   return m;
@@ -116,7 +116,8 @@ StabilityCell classify_summary(const std::string& text) {
       return at == std::string::npos ? std::string("?") : std::to_string(std::atol(t.c_str() + at + marker.size()));
     };
     if (!search.empty()) c.detail = "search " + count_after(search, "in one step ");
-    if (!pass.empty()) c.detail += (c.detail.empty() ? "" : ", ") + std::string("pass ") + std::to_string(std::atol(pass.c_str()));
+    if (!pass.empty())
+      c.detail += (c.detail.empty() ? "" : ", ") + std::string("pass ") + std::to_string(std::atol(pass.c_str()));
     c.cause = !search.empty() ? (!pass.empty() ? "search+pass" : "search") : "pass_through";
     c.diagnosis = search + (search.empty() || pass.empty() ? "" : "; ") + pass;
     return c;
@@ -199,8 +200,7 @@ std::string stability_csv(const StabilityResult& r) {
   for (const auto& c : r.cells)
     out += csv_quote(c.map) + "," + csv_quote(c.x_key) + "," + csv_quote(c.x_value) + "," + csv_quote(c.y_key) + "," +
            csv_quote(c.y_value) + "," + c.status + "," + csv_quote(c.cause) + "," + csv_quote(c.detail) + "," +
-           csv_quote(c.diagnosis) + "," +
-           fmt("%.3f", c.wall_time_s) + "," + fmt("%.2f", c.end_time_us) + "\n";
+           csv_quote(c.diagnosis) + "," + fmt("%.3f", c.wall_time_s) + "," + fmt("%.2f", c.end_time_us) + "\n";
   return out;
 }
 
@@ -246,8 +246,10 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
     for (const auto& c : cells) {
       if (c.map != m) continue;
       xk = c.x_key, yk = c.y_key;
-      if (std::find(g.x_labels.begin(), g.x_labels.end(), c.x_value) == g.x_labels.end()) g.x_labels.push_back(c.x_value);
-      if (std::find(g.y_labels.begin(), g.y_labels.end(), c.y_value) == g.y_labels.end()) g.y_labels.push_back(c.y_value);
+      if (std::find(g.x_labels.begin(), g.x_labels.end(), c.x_value) == g.x_labels.end())
+        g.x_labels.push_back(c.x_value);
+      if (std::find(g.y_labels.begin(), g.y_labels.end(), c.y_value) == g.y_labels.end())
+        g.y_labels.push_back(c.y_value);
     }
     g.cells.assign(g.x_labels.size() * g.y_labels.size(), -1);
     g.cell_text.assign(g.cells.size(), "");
@@ -261,10 +263,13 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
       g.cells[i] = k;
       if (k >= 0) ++counts[k];
       // Short cell text: what broke (the diagnosis is in stability.csv / .md).
-      static const std::map<std::string, std::string> shorter{
-          {"energy_balance", "energy"}, {"non_finite", "NaN"},         {"search_lost", "lost"},
-          {"node_escaped", "escaped"},  {"projectile_left_domain", "left"}, {"search+pass", "search, pass"},
-          {"pass_through", "pass"}};
+      static const std::map<std::string, std::string> shorter{{"energy_balance", "energy"},
+                                                              {"non_finite", "NaN"},
+                                                              {"search_lost", "lost"},
+                                                              {"node_escaped", "escaped"},
+                                                              {"projectile_left_domain", "left"},
+                                                              {"search+pass", "search, pass"},
+                                                              {"pass_through", "pass"}};
       std::string t = c.status == "stable" ? "ok" : !c.detail.empty() ? c.detail : c.cause.empty() ? c.status : c.cause;
       if (shorter.count(t)) t = shorter.at(t);
       std::replace(t.begin(), t.end(), '_', ' ');
@@ -273,7 +278,8 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
     ch.title = "Stability map: " + short_key(yk) + " vs " + short_key(xk);
     ch.subtitle = subtitle.empty() ? "" : subtitle + "; ";
     ch.subtitle += std::to_string(counts[0]) + " stable, " + std::to_string(counts[1]) + " warned, " +
-                   std::to_string(counts[2]) + " diverged" + (counts[3] ? ", " + std::to_string(counts[3]) + " failed" : "") +
+                   std::to_string(counts[2]) + " diverged" +
+                   (counts[3] ? ", " + std::to_string(counts[3]) + " failed" : "") +
                    " (warned: yarns slid > 1 node in a step, or passed through)";
     ch.x = {xk, ""};
     ch.y = {yk, ""};
@@ -310,9 +316,11 @@ std::vector<std::string> stability_sentences(const StabilityResult& r) {
         bool all_bad_after = true;
         for (size_t i = first_bad; i < row.size(); ++i)
           if (row[i]->status == "stable") all_bad_after = false;
-        if (first_bad > 0) s += "stable up to " + short_key(m.x.key) + " = " + row[first_bad - 1]->x_value + "; ";
-        else s += std::string(row[0]->status == "diverged" ? "diverged" : "not stable") + " already at " +
-                  short_key(m.x.key) + " = " + row[0]->x_value + "; ";
+        if (first_bad > 0)
+          s += "stable up to " + short_key(m.x.key) + " = " + row[first_bad - 1]->x_value + "; ";
+        else
+          s += std::string(row[0]->status == "diverged" ? "diverged" : "not stable") + " already at " +
+               short_key(m.x.key) + " = " + row[0]->x_value + "; ";
         std::map<std::string, std::vector<std::string>> by;
         std::vector<std::string> order;
         for (size_t i = first_bad; i < row.size(); ++i) {
@@ -332,7 +340,8 @@ std::vector<std::string> stability_sentences(const StabilityResult& r) {
       }
       for (const auto& [yv, crit] : r.critical_dt)
         if (yv == y && m.x.key == "solver.dt_factor")
-          s += " [theory: critical dt_factor about " + fmt("%.2f", crit) + " for this mesh (core/model.h critical_dt_factor)]";
+          s += " [theory: critical dt_factor about " + fmt("%.2f", crit) +
+               " for this mesh (core/model.h critical_dt_factor)]";
       out.push_back(s);
     }
   }
@@ -342,7 +351,8 @@ std::vector<std::string> stability_sentences(const StabilityResult& r) {
 std::string stability_markdown(const StabilityResult& r, const StabilityOptions& opt) {
   std::string ov;
   for (const auto& o : opt.overrides) ov += " --set " + o;
-  std::string md = "# Stability map\n\nScene `" + opt.scene_path + "`" + ov + ". Every cell is one run to its end "
+  std::string md = "# Stability map\n\nScene `" + opt.scene_path + "`" + ov +
+                   ". Every cell is one run to its end "
                    "(perforation, rebound or the scene's end time): **stable** (completed, assumptions held), "
                    "**warned** (completed, but the nearest-pair search saw yarns slide more than one node in a step "
                    "or pass through each other), **diverged** (the solver stopped it; cause in the cell), "

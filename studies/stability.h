@@ -22,10 +22,10 @@
 namespace ravel::studies {
 
 struct StabilityMapSpec {
-  std::string name;                      // folder and file stem, e.g. "dt_factor"
+  std::string name;  // folder and file stem, e.g. "dt_factor"
   std::string title;
-  Vary x, y;                             // columns, rows
-  std::vector<std::string> fixed;        // extra overrides for this map only
+  Vary x, y;                       // columns, rows
+  std::vector<std::string> fixed;  // extra overrides for this map only
 };
 
 // The default maps (quick: fewer cells).
@@ -33,12 +33,12 @@ std::vector<StabilityMapSpec> default_stability_maps(bool quick = false);
 
 struct StabilityCell {
   std::string map, x_key, x_value, y_key, y_value;
-  std::string status;                    // stable | warned | diverged | failed
-  std::string diagnosis;                 // in words
-  std::string cause;                     // diverged: divergence_cause; warned: search | pass_through | search+pass
-  std::string detail;                    // warned: how often ("search 47, pass 22"); the chart's cell text
+  std::string status;     // stable | warned | diverged | failed
+  std::string diagnosis;  // in words
+  std::string cause;      // diverged: divergence_cause; warned: search | pass_through | search+pass
+  std::string detail;     // warned: how often ("search 47, pass 22"); the chart's cell text
   double wall_time_s = 0;
-  double end_time_us = 0;                // simulated time reached
+  double end_time_us = 0;  // simulated time reached
 };
 
 // Classify a run from its summary.json text.
@@ -48,7 +48,7 @@ struct StabilityOptions {
   std::string scene_path;
   std::vector<std::string> overrides;
   std::string out_dir;
-  std::vector<StabilityMapSpec> maps;    // default_stability_maps() unless set
+  std::vector<StabilityMapSpec> maps;  // default_stability_maps() unless set
   int jobs = 1;
   int solver_threads = 1;
   std::function<void(const std::string&)> on_progress;
@@ -57,7 +57,7 @@ struct StabilityOptions {
 struct StabilityResult {
   std::vector<StabilityCell> cells;
   std::vector<StabilityMapSpec> maps;
-  std::vector<std::string> critical;     // per dt map row: the model's critical_dt_factor, in words
+  std::vector<std::string> critical;                        // per dt map row: the model's critical_dt_factor, in words
   std::vector<std::pair<std::string, double>> critical_dt;  // (y value, critical_dt_factor) of the dt map
   double wall_time_s = 0;
   bool interrupted = false;

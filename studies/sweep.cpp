@@ -55,8 +55,7 @@ std::string host_name() {
 Vary parse_vary(const std::string& text, const std::string& base_scene_path,
                 const std::vector<std::string>& base_overrides) {
   const auto eq = text.find('=');
-  if (eq == std::string::npos)
-    throw StudyError("--vary '" + text + "': expected key=start:stop:step or key=v1,v2,...");
+  if (eq == std::string::npos) throw StudyError("--vary '" + text + "': expected key=start:stop:step or key=v1,v2,...");
   Vary v;
   v.key = trim(text.substr(0, eq));
   const std::string spec = trim(text.substr(eq + 1));
@@ -158,7 +157,9 @@ std::vector<Case> shard_cases(const std::vector<Case>& all, Shard shard) {
   return out;
 }
 
-std::string case_dir(const std::string& out_dir, const Case& c) { return out_dir + "/" + c.name(); }
+std::string case_dir(const std::string& out_dir, const Case& c) {
+  return out_dir + "/" + c.name();
+}
 
 bool case_finished(const std::string& out_dir, const Case& c) {
   std::error_code ec;
@@ -244,7 +245,8 @@ std::string results_csv(const std::string& out_dir, const std::vector<Case>& cas
     }
     for (const auto& k : summary_keys) {
       std::string v;
-      if (j.contains(k)) v = json_cell(j[k]);
+      if (j.contains(k))
+        v = json_cell(j[k]);
       else if (k.size() > 6 && k.substr(k.size() - 6) == "_count" && j.contains(k.substr(0, k.size() - 6)))
         v = json_cell(j[k.substr(0, k.size() - 6)]);
       out += "," + csv_cell(v);
@@ -268,8 +270,10 @@ Csv parse_csv(const std::string& text) {
   auto end_row = [&] {
     row.push_back(cell);
     cell.clear();
-    if (csv.header.empty()) csv.header = row;
-    else csv.rows.push_back(row);
+    if (csv.header.empty())
+      csv.header = row;
+    else
+      csv.rows.push_back(row);
     row.clear();
     any = false;
   };
@@ -286,17 +290,21 @@ Csv parse_csv(const std::string& text) {
       }
       continue;
     }
-    if (c == '"') quoted = true, any = true;
-    else if (c == ',') row.push_back(cell), cell.clear(), any = true;
-    else if (c == '\n') end_row();
-    else if (c != '\r') cell += c, any = true;
+    if (c == '"')
+      quoted = true, any = true;
+    else if (c == ',')
+      row.push_back(cell), cell.clear(), any = true;
+    else if (c == '\n')
+      end_row();
+    else if (c != '\r')
+      cell += c, any = true;
   }
   if (any || !cell.empty() || !row.empty()) end_row();
   return csv;
 }
 
 std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
-                                                       const std::vector<std::string>& varied_keys) {
+                                                        const std::vector<std::string>& varied_keys) {
   std::vector<std::pair<std::string, Chart>> out;
   if (varied_keys.empty() || results.rows.empty()) return out;
   const int xc = results.column(varied_keys[0]);
@@ -402,9 +410,12 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
   auto report_case = [&](const CaseResult& r) {
     std::lock_guard<std::mutex> lock(mu);
     ++prog.done;
-    if (r.skipped) ++prog.skipped, ++rep.cases_skipped;
-    else if (!r.ok) ++prog.failed, ++rep.cases_failed, rep.errors.push_back(r.c.name() + ": " + r.error);
-    else ++rep.cases_run;
+    if (r.skipped)
+      ++prog.skipped, ++rep.cases_skipped;
+    else if (!r.ok)
+      ++prog.failed, ++rep.cases_failed, rep.errors.push_back(r.c.name() + ": " + r.error);
+    else
+      ++rep.cases_run;
     prog.wall_time_s = elapsed();
     if (hooks.on_case) hooks.on_case(r);
     if (hooks.on_progress) hooks.on_progress(prog);

@@ -41,10 +41,10 @@ Vary parse_vary(const std::string& text, const std::string& base_scene_path = ""
                 const std::vector<std::string>& base_overrides = {});
 
 struct Case {
-  int index = 0;                                         // position in the full sweep
+  int index = 0;                                              // position in the full sweep
   std::vector<std::pair<std::string, std::string>> settings;  // key, value
-  std::string name() const;                              // folder name, from the settings
-  std::vector<std::string> overrides() const;            // "key=value"
+  std::string name() const;                                   // folder name, from the settings
+  std::vector<std::string> overrides() const;                 // "key=value"
 };
 
 // Every combination; the last --vary changes fastest.
@@ -58,38 +58,38 @@ Shard parse_shard(const std::string& text);  // "i/n", 1 <= i <= n
 std::vector<Case> shard_cases(const std::vector<Case>& all, Shard shard);
 
 struct SweepOptions {
-  std::string scene_path;                 // "" = default scene
-  std::vector<std::string> overrides;     // base --set overrides, applied before each case's
+  std::string scene_path;              // "" = default scene
+  std::vector<std::string> overrides;  // base --set overrides, applied before each case's
   std::string out_dir;
-  int jobs = 1;                           // concurrent cases
-  int solver_threads = 1;                 // solver.threads of each case
+  int jobs = 1;            // concurrent cases
+  int solver_threads = 1;  // solver.threads of each case
   Shard shard;
 };
 
 // One finished (or previously finished) case.
 struct CaseResult {
   Case c;
-  bool skipped = false;                   // found finished on disk, not run now
-  bool ok = true;                         // false: failed to run (error text in error)
+  bool skipped = false;  // found finished on disk, not run now
+  bool ok = true;        // false: failed to run (error text in error)
   std::string error;
-  std::string summary_json_text;          // the case's summary.json
+  std::string summary_json_text;  // the case's summary.json
 };
 
 struct SweepProgress {
-  int total = 0;        // cases in this shard
-  int done = 0;         // finished now or before
-  int skipped = 0;      // found finished
+  int total = 0;    // cases in this shard
+  int done = 0;     // finished now or before
+  int skipped = 0;  // found finished
   int failed = 0;
   double wall_time_s = 0;
 };
 
 struct SweepReport {
-  int cases_total = 0;        // in the whole sweep
+  int cases_total = 0;  // in the whole sweep
   int cases_in_shard = 0;
-  int cases_run = 0;          // run now
-  int cases_skipped = 0;      // already finished
+  int cases_run = 0;      // run now
+  int cases_skipped = 0;  // already finished
   int cases_failed = 0;
-  int cases_diverged = 0;     // ran but the simulation diverged (still written)
+  int cases_diverged = 0;  // ran but the simulation diverged (still written)
   double wall_time_s = 0;
   double cases_per_hour = 0;  // cases run now / wall hours
   bool interrupted = false;
@@ -132,7 +132,7 @@ Csv parse_csv(const std::string& text);
 // first varied key (when its values are numbers), one series per combination of the
 // other varied keys. Each chart's file stem is returned beside it.
 std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
-                                                               const std::vector<std::string>& varied_keys);
+                                                        const std::vector<std::string>& varied_keys);
 std::string read_text_file(const std::string& path);
 
 }  // namespace ravel::studies

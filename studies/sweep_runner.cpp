@@ -11,7 +11,9 @@ SweepRunner::~SweepRunner() {
   if (thread_.joinable()) thread_.join();
 }
 
-void SweepRunner::cancel() { interrupt_.store(true); }
+void SweepRunner::cancel() {
+  interrupt_.store(true);
+}
 
 bool SweepRunner::running() const {
   std::lock_guard<std::mutex> lock(mu_);

@@ -22,9 +22,9 @@ class SweepRunner {
   struct Snapshot {
     bool running = false, finished = false;
     SweepProgress progress;
-    SweepReport report;              // valid when finished
-    std::string error;               // bad input or output error (not started / stopped)
-    Csv results;                     // one row per case done so far: case, varied keys, summary keys
+    SweepReport report;  // valid when finished
+    std::string error;   // bad input or output error (not started / stopped)
+    Csv results;         // one row per case done so far: case, varied keys, summary keys
     std::vector<std::string> varied_keys;
     // Charts of `results` (energy absorbed, residual velocity vs the first varied key).
     std::vector<std::pair<std::string, Chart>> charts() const { return sweep_charts(results, varied_keys); }

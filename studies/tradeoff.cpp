@@ -313,14 +313,17 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
   hooks.on_simulation = [&](const Case&, const Simulation&, const std::string& tmp) {
     ojson c;
     c["cpu_time_s"] = meter.take();
-    c["cpu_time_measure"] = opt.solver_threads == 1 ? "user time of the case's thread"
-                                                    : "user time of the process (one case at a time)";
+    c["cpu_time_measure"] =
+        opt.solver_threads == 1 ? "user time of the case's thread" : "user time of the process (one case at a time)";
     write_file_atomic(tmp + "/cost.json", c.dump(2) + "\n");
   };
   hooks.on_case = [&](const CaseResult& r) {
-    if (r.skipped) ++res.runs_skipped;
-    else ++res.runs;
-    if (opt.on_progress && !r.skipped) opt.on_progress(r.ok ? "done " + r.c.name() : "FAILED " + r.c.name() + ": " + r.error);
+    if (r.skipped)
+      ++res.runs_skipped;
+    else
+      ++res.runs;
+    if (opt.on_progress && !r.skipped)
+      opt.on_progress(r.ok ? "done " + r.c.name() : "FAILED " + r.c.name() + ": " + r.error);
   };
   if (opt.solver_threads != 1 && opt.jobs != 1)
     res.warnings.push_back("CPU time per case is only measured with --threads 1 or --jobs 1");
@@ -372,7 +375,8 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
           }
           if (opt.on_progress) {
             std::lock_guard<std::mutex> lock(mu);
-            opt.on_progress("ballistic limit " + todo[i].name() + ": " + (std::isnan(v) ? "not found" : num(v) + " m/s"));
+            opt.on_progress("ballistic limit " + todo[i].name() + ": " +
+                            (std::isnan(v) ? "not found" : num(v) + " m/s"));
           }
         }
         std::lock_guard<std::mutex> lock(mu);
@@ -428,9 +432,12 @@ TradeoffVerdictEntry cheapest_within(const TradeoffResult& r, const std::string&
 namespace {
 
 bool has_bl(const TradeoffResult& r) {
-  return std::any_of(r.rows.begin(), r.rows.end(), [](const TradeoffRow& x) { return !std::isnan(x.value_q[q_ballistic_limit]); });
+  return std::any_of(r.rows.begin(), r.rows.end(),
+                     [](const TradeoffRow& x) { return !std::isnan(x.value_q[q_ballistic_limit]); });
 }
-int quantity_count(const TradeoffResult& r) { return has_bl(r) ? 4 : 3; }
+int quantity_count(const TradeoffResult& r) {
+  return has_bl(r) ? 4 : 3;
+}
 
 std::string cell(double v, const char* f = "%.6g") {
   if (std::isnan(v)) return "";
@@ -461,12 +468,12 @@ std::string tradeoff_csv(const TradeoffResult& r) {
       "perforation_time_error,ballistic_limit_error,status,residual_velocity_mps,energy_absorbed_J,perforation_time_s,"
       "ballistic_limit_mps,cost_s,note,case\n";
   for (const auto& row : r.rows) {
-    out += csv_quote(row.knob) + "," + csv_quote(row.value) + "," + cell(row.wall_time_s) + "," +
-           cell(row.cpu_time_s) + "," + cell(row.node_steps_per_s) + "," + cell(row.error[0]) + "," +
-           cell(row.error[1]) + "," + cell(row.error[2]) + "," + cell(row.error[3]) + "," + row.status + "," +
-           cell(row.value_q[0]) + "," + cell(row.value_q[1]) + "," +
-           (row.value_q[2] >= 0 ? cell(row.value_q[2]) : std::string()) + "," + cell(row.value_q[3]) + "," +
-           cell(row.cost_s) + "," + csv_quote(row.note) + "," + csv_quote(row.case_name) + "\n";
+    out += csv_quote(row.knob) + "," + csv_quote(row.value) + "," + cell(row.wall_time_s) + "," + cell(row.cpu_time_s) +
+           "," + cell(row.node_steps_per_s) + "," + cell(row.error[0]) + "," + cell(row.error[1]) + "," +
+           cell(row.error[2]) + "," + cell(row.error[3]) + "," + row.status + "," + cell(row.value_q[0]) + "," +
+           cell(row.value_q[1]) + "," + (row.value_q[2] >= 0 ? cell(row.value_q[2]) : std::string()) + "," +
+           cell(row.value_q[3]) + "," + cell(row.cost_s) + "," + csv_quote(row.note) + "," + csv_quote(row.case_name) +
+           "\n";
   }
   return out;
 }
@@ -565,18 +572,17 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
           for (const auto& [k, v] : opt.reference_overrides) t += (t.empty() ? "; but " : ", ") + k + " = " + v;
           return t;
         }() +
-        "). Cost: " +
-        (opt.cost == "cpu" ? "user CPU time" : "wall time") + " of the run, " + std::to_string(opt.jobs) +
+        "). Cost: " + (opt.cost == "cpu" ? "user CPU time" : "wall time") + " of the run, " + std::to_string(opt.jobs) +
         " job(s) at a time, " + std::to_string(opt.solver_threads) + " solver thread(s).";
   if (!opt.note.empty()) md += " " + opt.note;
   md += "\n\n";
   if (!r.rows.empty()) {
     const auto& ref = r.rows[0];
-    md += "Reference (`" + ref.case_name + "`): " + ref.status + ", residual velocity " + cell(ref.value_q[0], "%.2f") + " m/s, energy absorbed " +
-          cell(ref.value_q[1], "%.2f") + " J, perforation " +
+    md += "Reference (`" + ref.case_name + "`): " + ref.status + ", residual velocity " + cell(ref.value_q[0], "%.2f") +
+          " m/s, energy absorbed " + cell(ref.value_q[1], "%.2f") + " J, perforation " +
           (ref.value_q[2] >= 0 ? cell(ref.value_q[2] * 1e6, "%.1f") + " us" : std::string("none")) +
-          (std::isnan(ref.value_q[3]) ? "" : ", ballistic limit " + cell(ref.value_q[3], "%.1f") + " m/s") +
-          ", cost " + cell(ref.cost_s, "%.2f") + " s.\n\n";
+          (std::isnan(ref.value_q[3]) ? "" : ", ballistic limit " + cell(ref.value_q[3], "%.1f") + " m/s") + ", cost " +
+          cell(ref.cost_s, "%.2f") + " s.\n\n";
   }
   const int nq = quantity_count(r);
   md += "## Verdict: the cheapest setting within 1 % / 5 % of the reference\n\n| knob |";
@@ -593,10 +599,9 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
       std::string c;
       for (double tol : kTolerances) {
         const auto e = cheapest_within(r, k, q, tol);
-        c += (c.empty() ? "" : " / ") +
-             (e.found ? (k.empty() ? short_knob(e.knob) + "=" : std::string()) + e.value + " (" +
-                            cell(e.cost_s, "%.3g") + " s)"
-                      : std::string("none"));
+        c += (c.empty() ? "" : " / ") + (e.found ? (k.empty() ? short_knob(e.knob) + "=" : std::string()) + e.value +
+                                                       " (" + cell(e.cost_s, "%.3g") + " s)"
+                                                 : std::string("none"));
       }
       md += " " + c + " |";
     }
@@ -617,8 +622,9 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
     md += "\n## Warnings\n\n";
     for (const auto& w : r.warnings) md += "- " + w + "\n";
   }
-  md += "\nCharts: `tradeoff_<quantity>.{png,svg,csv}` (error against cost, log-log, one series per knob, the "
-        "Pareto front dashed black). Rows: `tradeoff.csv`; runs: `cases/`.\n";
+  md +=
+      "\nCharts: `tradeoff_<quantity>.{png,svg,csv}` (error against cost, log-log, one series per knob, the "
+      "Pareto front dashed black). Rows: `tradeoff.csv`; runs: `cases/`.\n";
   return md;
 }
 
@@ -658,7 +664,8 @@ std::vector<std::pair<std::string, Chart>> tradeoff_charts(const TradeoffResult&
     if (!r.rows.empty()) {
       all_cost.push_back(r.rows[0].cost_s);
       all_err.push_back(0);
-      if (std::isfinite(r.rows[0].cost_s)) xmin = std::min(xmin, r.rows[0].cost_s), xmax = std::max(xmax, r.rows[0].cost_s);
+      if (std::isfinite(r.rows[0].cost_s))
+        xmin = std::min(xmin, r.rows[0].cost_s), xmax = std::max(xmax, r.rows[0].cost_s);
     }
     Series front{"Pareto front", {}, {}, SeriesStyle::line};
     front.color = 7;

@@ -60,20 +60,20 @@ double perforation_time_error(double value_s, double ref_s);
 std::vector<size_t> pareto_front(const std::vector<double>& cost, const std::vector<double>& error);
 
 struct TradeoffRow {
-  std::string knob;                 // scene key, or "reference"
-  std::string value;                // the knob's value ("finest" for the reference)
-  std::string case_name;            // folder under DIR/cases
-  std::string status;               // completed | warned | diverged | failed | missing
-  std::string note;                 // diagnosis / warnings, in words
+  std::string knob;       // scene key, or "reference"
+  std::string value;      // the knob's value ("finest" for the reference)
+  std::string case_name;  // folder under DIR/cases
+  std::string status;     // completed | warned | diverged | failed | missing
+  std::string note;       // diagnosis / warnings, in words
   double wall_time_s = NAN, cpu_time_s = NAN, node_steps_per_s = NAN;
   double value_q[kTradeoffQuantities] = {NAN, NAN, NAN, NAN};  // the quantities (m/s, J, s, m/s)
   double error[kTradeoffQuantities] = {NAN, NAN, NAN, NAN};    // relative to the reference
   bool perforated = false;
-  double cost_s = NAN;              // the chosen cost measure (TradeoffOptions::cost), s
+  double cost_s = NAN;  // the chosen cost measure (TradeoffOptions::cost), s
 };
 
 struct TradeoffOptions {
-  std::string scene_path;           // resolved file
+  std::string scene_path;  // resolved file
   std::vector<std::string> overrides;
   std::string out_dir;
   std::vector<TradeoffKnob> knobs;  // default_tradeoff_knobs() unless set
@@ -81,13 +81,13 @@ struct TradeoffOptions {
   // Knob values of the reference other than the finest (--reference KEY=VALUE), e.g. when
   // the finest setting itself diverges. Said in every output.
   std::vector<std::pair<std::string, std::string>> reference_overrides;
-  std::string cost = "wall";        // wall | cpu: the cost the verdict and charts use
+  std::string cost = "wall";  // wall | cpu: the cost the verdict and charts use
   int jobs = 1;
   int solver_threads = 1;
-  bool limit = false;               // also the ballistic limit of every setting
-  LimitOptions limit_options;       // tolerance etc. (start: 100 m/s)
-  std::string date;                 // YYYY-MM-DD written into tradeoff.json ("" = today)
-  std::string note;                 // free text (machine load, quick mode) for tradeoff.json
+  bool limit = false;                                        // also the ballistic limit of every setting
+  LimitOptions limit_options;                                // tolerance etc. (start: 100 m/s)
+  std::string date;                                          // YYYY-MM-DD written into tradeoff.json ("" = today)
+  std::string note;                                          // free text (machine load, quick mode) for tradeoff.json
   std::function<void(const std::string& what)> on_progress;  // one line per finished run
 };
 
@@ -98,10 +98,10 @@ struct TradeoffVerdictEntry {
 };
 
 struct TradeoffResult {
-  std::vector<TradeoffRow> rows;    // rows[0] is the reference
+  std::vector<TradeoffRow> rows;  // rows[0] is the reference
   std::string scene_name;
   double impact_velocity_mps = 0;
-  double wall_time_s = 0;           // the whole study
+  double wall_time_s = 0;  // the whole study
   int runs = 0, runs_skipped = 0;
   bool interrupted = false;
   std::vector<std::string> warnings;

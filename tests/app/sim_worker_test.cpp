@@ -233,14 +233,30 @@ TEST(SimWorker, CommandStormFromManyThreads) {
       std::mt19937 rng(1234 + c);
       while (!stop.load()) {
         switch (rng() % 8) {
-          case 0: w.play(); break;
-          case 1: w.pause(); break;
-          case 2: w.step_once(1 + int(rng() % 3)); break;
-          case 3: w.reset(); break;
-          case 4: w.restart(small_scene({"yarn.friction=0." + std::to_string(1 + rng() % 5)})); break;
-          case 5: w.set_pacing({rng() % 2 == 0, 5.0}); break;
-          case 6: w.clear_past_runs(); break;
-          default: w.toggle_pause(); break;
+          case 0:
+            w.play();
+            break;
+          case 1:
+            w.pause();
+            break;
+          case 2:
+            w.step_once(1 + int(rng() % 3));
+            break;
+          case 3:
+            w.reset();
+            break;
+          case 4:
+            w.restart(small_scene({"yarn.friction=0." + std::to_string(1 + rng() % 5)}));
+            break;
+          case 5:
+            w.set_pacing({rng() % 2 == 0, 5.0});
+            break;
+          case 6:
+            w.clear_past_runs();
+            break;
+          default:
+            w.toggle_pause();
+            break;
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(rng() % 7));
       }

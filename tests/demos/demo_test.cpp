@@ -121,14 +121,14 @@ TEST(DemoTheory, SmithWaveSatisfiesItsOwnRelation) {
 // slowest run, never past a stop, never backwards; finished runs do not hold it back.
 TEST(DemoClock, SlowestRunGatesAndKeyFramesStop) {
   SharedClock c;
-  c.set_rate(10e-6);  // 10 us per wall second
-  EXPECT_NEAR(c.advance(0.1, {0.0, 0.0}, -1, 0.5e-6), 0.5e-6, 1e-12);      // lead-limited
-  EXPECT_NEAR(c.advance(0.1, {2e-6, 0.6e-6}, -1, 0.5e-6), 1.1e-6, 1e-12);  // slowest + lead
-  EXPECT_NEAR(c.advance(0.01, {2e-6, 2e-6}, -1, 5e-6), 1.2e-6, 1e-12);     // rate-limited
-  EXPECT_NEAR(c.advance(1.0, {5e-6, 5e-6}, 3e-6, 5e-6), 3e-6, 1e-12);      // stop at a key frame
-  EXPECT_NEAR(c.advance(1.0, {0.0, 0.0}, -1, 0.5e-6), 3e-6, 1e-12);        // never backwards
+  c.set_rate(10e-6);                                                         // 10 us per wall second
+  EXPECT_NEAR(c.advance(0.1, {0.0, 0.0}, -1, 0.5e-6), 0.5e-6, 1e-12);        // lead-limited
+  EXPECT_NEAR(c.advance(0.1, {2e-6, 0.6e-6}, -1, 0.5e-6), 1.1e-6, 1e-12);    // slowest + lead
+  EXPECT_NEAR(c.advance(0.01, {2e-6, 2e-6}, -1, 5e-6), 1.2e-6, 1e-12);       // rate-limited
+  EXPECT_NEAR(c.advance(1.0, {5e-6, 5e-6}, 3e-6, 5e-6), 3e-6, 1e-12);        // stop at a key frame
+  EXPECT_NEAR(c.advance(1.0, {0.0, 0.0}, -1, 0.5e-6), 3e-6, 1e-12);          // never backwards
   EXPECT_NEAR(c.advance(0.1, {HUGE_VAL, 3e-6}, -1, 0.5e-6), 3.5e-6, 1e-12);  // a finished run does not gate
-  c.set_rate(0);  // as fast as the slowest run
+  c.set_rate(0);                                                             // as fast as the slowest run
   EXPECT_NEAR(c.advance(0.01, {10e-6, 4e-6}, -1, 1e-6), 5e-6, 1e-12);
 }
 
@@ -200,8 +200,12 @@ double find_line(const Image& img, int row, int from_px, int to_px, bool (*match
   return first < 0 ? -1 : 0.5 * (first + last);
 }
 
-bool is_magenta(const unsigned char* p) { return p[0] > 200 && p[1] < 150 && p[2] > 190; }
-bool is_white(const unsigned char* p) { return p[0] > 235 && p[1] > 235 && p[2] > 235; }
+bool is_magenta(const unsigned char* p) {
+  return p[0] > 200 && p[1] < 150 && p[2] > 190;
+}
+bool is_white(const unsigned char* p) {
+  return p[0] > 235 && p[1] > 235 && p[2] > 235;
+}
 
 // The drawn fronts sit where c t and U t put them, measured on the PNG: along the image
 // row through the strike point (top view, +x to the right), the overlay's colour is

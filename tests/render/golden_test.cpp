@@ -61,8 +61,8 @@ void check_golden(const std::string& name, const Image& img) {
   }
   const double fraction = double(differing) / (w * h);
   EXPECT_LE(fraction, kMaxDifferingFraction)
-      << name << ": " << differing << " pixels (" << 100 * fraction << " %) differ by more than "
-      << kPixelThreshold << ", worst " << worst << "; see " << out_dir;
+      << name << ": " << differing << " pixels (" << 100 * fraction << " %) differ by more than " << kPixelThreshold
+      << ", worst " << worst << "; see " << out_dir;
   if (fraction > kMaxDifferingFraction) {
     std::filesystem::create_directories(out_dir);
     render::write_png(out_dir + "/" + name + "_actual.png", w, h, img.rgb);

@@ -105,16 +105,14 @@ TEST(RenderRun, StrainedRegionColourDiffersFromUnstrained) {
     const auto& a = f.node_pos[f.elem_a[e]];
     const auto& b = f.node_pos[f.elem_b[e]];
     float u, v;
-    EXPECT_TRUE(c.project({0.5f * (a[0] + b[0]), 0.5f * (a[1] + b[1]), 0.5f * (a[2] + b[2])},
-                          float(w) / h, &u, &v));
+    EXPECT_TRUE(c.project({0.5f * (a[0] + b[0]), 0.5f * (a[1] + b[1]), 0.5f * (a[2] + b[2])}, float(w) / h, &u, &v));
     *x = u * w, *y = v * h;
   };
   float xh, yh, xl, yl;
   centre_px(hi, &xh, &yh);
   centre_px(lo, &xl, &yl);
   const auto hot = mean_color(img, xh, yh, 1.5f), cold = mean_color(img, xl, yl, 1.5f);
-  EXPECT_GT(color_distance(hot, cold), 0.2f)
-      << "strain " << f.elem_strain[hi] << " vs " << f.elem_strain[lo];
+  EXPECT_GT(color_distance(hot, cold), 0.2f) << "strain " << f.elem_strain[hi] << " vs " << f.elem_strain[lo];
 }
 
 }  // namespace

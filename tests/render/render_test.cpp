@@ -50,8 +50,7 @@ TEST(RenderCamera, FitPutsEveryFabricCornerInsideTheView) {
       for (float y : {-f.half_length_m, f.half_length_m}) {
         float u, w;
         ASSERT_TRUE(c.project({x, y, 0}, 1.5f, &u, &w));
-        umin = std::min(umin, u), umax = std::max(umax, u), vmin = std::min(vmin, w),
-        vmax = std::max(vmax, w);
+        umin = std::min(umin, u), umax = std::max(umax, u), vmin = std::min(vmin, w), vmax = std::max(vmax, w);
       }
     EXPECT_GE(umin, 0.0f) << to_string(v);
     EXPECT_LE(umax, 1.0f) << to_string(v);
@@ -115,8 +114,7 @@ TEST(RenderCoverage, QuarterModelIsMirroredToTheFullFabric) {
     EXPECT_LT(background_fraction_in_circle(full, bg, centres[i][0], centres[i][1], 10), 0.02)
         << "quadrant " << i << " of the mirrored fabric is empty";
     const double expected_bg = i == 0 ? 0.0 : 1.0;
-    EXPECT_NEAR(background_fraction_in_circle(quarter, bg, centres[i][0], centres[i][1], 10),
-                expected_bg, 0.02)
+    EXPECT_NEAR(background_fraction_in_circle(quarter, bg, centres[i][0], centres[i][1], 10), expected_bg, 0.02)
         << "quadrant " << i << " without mirroring";
   }
   EXPECT_EQ(headless().stats().mirror_copies, 1);
@@ -157,8 +155,7 @@ TEST(RenderColor, StrainedRegionDiffersFromUnstrained) {
   const Image img = render_image(f, c, o, w, h);
   float uc, vc, ue, ve;
   ASSERT_TRUE(c.project({0, 0, 0}, float(w) / h, &uc, &vc));
-  ASSERT_TRUE(
-      c.project({0.8f * f.half_width_m, 0.8f * f.half_length_m, 0}, float(w) / h, &ue, &ve));
+  ASSERT_TRUE(c.project({0.8f * f.half_width_m, 0.8f * f.half_length_m, 0}, float(w) / h, &ue, &ve));
   const render::Vec3 hot = mean_color(img, uc * w, vc * h, 4);
   const render::Vec3 cold = mean_color(img, ue * w, ve * h, 4);
   EXPECT_GT(color_distance(hot, cold), 0.35f);

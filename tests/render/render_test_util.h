@@ -16,9 +16,7 @@ namespace ravel::testing {
 struct Image {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgb;  // top row first
-  const std::uint8_t* at(int x, int y) const {
-    return &rgb[(static_cast<size_t>(y) * width + x) * 3];
-  }
+  const std::uint8_t* at(int x, int y) const { return &rgb[(static_cast<size_t>(y) * width + x) * 3]; }
 };
 
 // One offscreen renderer shared by every test in the binary (context creation and
@@ -40,8 +38,8 @@ inline Image render_image(const Frame& frame, const render::ViewOptions& options
   return img;
 }
 
-inline Image render_image(const Frame& frame, const render::Camera& camera,
-                          const render::ViewOptions& options, int w, int h) {
+inline Image render_image(const Frame& frame, const render::Camera& camera, const render::ViewOptions& options, int w,
+                          int h) {
   Image img{w, h, {}};
   std::string error;
   EXPECT_TRUE(headless().render(frame, camera, options, w, h, &img.rgb, &error)) << error;
@@ -70,8 +68,8 @@ inline int max_channel_diff(const std::uint8_t* a, const std::uint8_t* b) {
 
 // Fraction of pixels in a circle (pixel centre, radius in pixels) that match the
 // background image within `tolerance` per channel.
-inline double background_fraction_in_circle(const Image& img, const Image& bg, float cx, float cy,
-                                            float r, int tolerance = 6) {
+inline double background_fraction_in_circle(const Image& img, const Image& bg, float cx, float cy, float r,
+                                            int tolerance = 6) {
   int n = 0, same = 0;
   for (int y = std::max(0, int(cy - r)); y <= std::min(img.height - 1, int(cy + r)); ++y)
     for (int x = std::max(0, int(cx - r)); x <= std::min(img.width - 1, int(cx + r)); ++x) {
@@ -97,8 +95,7 @@ inline render::Vec3 mean_color(const Image& img, float cx, float cy, float r) {
 }
 
 inline float color_distance(const render::Vec3& a, const render::Vec3& b) {
-  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                   (a[2] - b[2]) * (a[2] - b[2]));
+  return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 }  // namespace ravel::testing

@@ -38,8 +38,7 @@ inline Frame make_synthetic_frame(const SyntheticFabric& s) {
   const int n = s.yarns;
   // Quarter: yarn 0 lies on the symmetry plane. Full: yarns centred on the origin.
   const float origin = s.quarter ? 0.0f : -0.5f * (n - 1) * s.spacing_m;
-  f.half_width_m = f.half_length_m =
-      s.quarter ? (n - 1) * s.spacing_m : 0.5f * (n - 1) * s.spacing_m;
+  f.half_width_m = f.half_length_m = s.quarter ? (n - 1) * s.spacing_m : 0.5f * (n - 1) * s.spacing_m;
   f.mirror_x = f.mirror_y = s.quarter;
 
   auto dent = [&](float x, float y) {
@@ -51,9 +50,7 @@ inline Frame make_synthetic_frame(const SyntheticFabric& s) {
     return s.peak_strain * f.failure_strain * std::exp(-r / s.strain_decay_m);
   };
   // Node (i, j) of family k: warp nodes first, then weft nodes.
-  auto node = [&](int k, int i, int j) {
-    return static_cast<std::uint32_t>(k * n * n + i * n + j);
-  };
+  auto node = [&](int k, int i, int j) { return static_cast<std::uint32_t>(k * n * n + i * n + j); };
   f.node_pos.resize(2 * n * n);
   f.node_vel.resize(2 * n * n);
   f.node_slip_rate.resize(2 * n * n);
@@ -75,8 +72,7 @@ inline Frame make_synthetic_frame(const SyntheticFabric& s) {
     f.elem_a.push_back(a);
     f.elem_b.push_back(b);
     f.elem_family.push_back(static_cast<std::uint8_t>(family));
-    const bool broken =
-        std::hypot(pa[0], pa[1]) < s.hole_radius_m || std::hypot(pb[0], pb[1]) < s.hole_radius_m;
+    const bool broken = std::hypot(pa[0], pa[1]) < s.hole_radius_m || std::hypot(pb[0], pb[1]) < s.hole_radius_m;
     f.elem_broken.push_back(broken ? 1 : 0);
     f.elem_yarn.push_back(yarn);
     const float e = strain_at(mx, my);

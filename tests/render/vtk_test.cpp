@@ -41,17 +41,15 @@ TEST(Vtk, SeriesWritesVtuPerFrameAndAPvdIndex) {
   const Frame f = make_synthetic_frame(s);
   const std::string vtu = slurp(dir + "/frame_00002.vtu");
   // Quarter model mirrored to the full fabric: 4 copies of points and cells.
-  EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(4 * f.node_pos.size()) + "\""),
-            std::string::npos);
-  EXPECT_NE(vtu.find("NumberOfCells=\"" + std::to_string(4 * f.elem_a.size()) + "\""),
-            std::string::npos);
+  EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(4 * f.node_pos.size()) + "\""), std::string::npos);
+  EXPECT_NE(vtu.find("NumberOfCells=\"" + std::to_string(4 * f.elem_a.size()) + "\""), std::string::npos);
   for (const char* name : {"strain", "stress", "velocity", "broken", "yarn_id"})
     EXPECT_NE(vtu.find(std::string("Name=\"") + name + "\""), std::string::npos) << name;
   // Appended raw data: each array = 8-byte length + payload. Points: 4 * nodes * 3 floats.
   const std::size_t np = 4 * f.node_pos.size(), nc = 4 * f.elem_a.size();
-  const std::size_t payload = (np * 3 * 4 + 8) * 2 + (np * 4 + 8)  // points, velocity, slip
-                              + 3 * (nc * 4 + 8)                   // strain, ratio, stress
-                              + 3 * (nc + 8) + (nc * 4 + 8)        // broken, family, copy, yarn
+  const std::size_t payload = (np * 3 * 4 + 8) * 2 + (np * 4 + 8)            // points, velocity, slip
+                              + 3 * (nc * 4 + 8)                             // strain, ratio, stress
+                              + 3 * (nc + 8) + (nc * 4 + 8)                  // broken, family, copy, yarn
                               + (2 * nc * 8 + 8) + (nc * 8 + 8) + (nc + 8);  // cells
   const std::size_t start = vtu.find('_', vtu.find("<AppendedData")) + 1;
   const std::size_t end = vtu.rfind("\n  </AppendedData>");

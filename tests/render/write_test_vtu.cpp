@@ -27,7 +27,6 @@ int main(int argc, char** argv) {
   int broken = 0;
   for (auto b : f.elem_broken) broken += b;
   // What the checker should find (whole fabric: 4 mirrored copies).
-  std::printf("%zu %zu %d %.9g\n", 4 * f.node_pos.size(), 4 * f.elem_a.size(), 4 * broken,
-              f.failure_strain);
+  std::printf("%zu %zu %d %.9g\n", 4 * f.node_pos.size(), 4 * f.elem_a.size(), 4 * broken, f.failure_strain);
   return 0;
 }

@@ -37,9 +37,9 @@ double rss_mb() {
 }
 
 Scene tiny(const std::string& extra = "yarn.friction=0.2") {
-  return load_scene(default_scene_path(), {"fabric.width_mm=16", "fabric.length_mm=16", "projectile.diameter_mm=3",
-                                           "projectile.mass_g=0.5", "solver.threads=1", "solver.end_time_us=4",
-                                           "output.progress=false", extra});
+  return load_scene(default_scene_path(),
+                    {"fabric.width_mm=16", "fabric.length_mm=16", "projectile.diameter_mm=3", "projectile.mass_g=0.5",
+                     "solver.threads=1", "solver.end_time_us=4", "output.progress=false", extra});
 }
 
 // One short run with its outputs written, as a sweep case does.
@@ -51,7 +51,8 @@ void one_run(int i, const std::string& dir) {
 }
 
 TEST(Memory, ManyShortRunsDoNotGrowTheResidentSet) {
-  const std::string dir = (std::filesystem::temp_directory_path() / ("ravel_memory_" + std::to_string(getpid()))).string();
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("ravel_memory_" + std::to_string(getpid()))).string();
   prepare_output_dir(dir);
   for (int i = 0; i < 30; ++i) one_run(i, dir);  // warm up: allocator pools, caches
   const double before = rss_mb();
@@ -101,8 +102,8 @@ TEST(Memory, StudyInTheBackgroundWhileEditing) {
   for (int round = 0; round < 2; ++round) {
     studies::SweepRunner runner;
     studies::SweepOptions opt;
-    opt.overrides = {"fabric.width_mm=16", "fabric.length_mm=16", "projectile.diameter_mm=3", "projectile.mass_g=0.5",
-                     "solver.end_time_us=20", "output.progress=false"};
+    opt.overrides = {"fabric.width_mm=16",    "fabric.length_mm=16",   "projectile.diameter_mm=3",
+                     "projectile.mass_g=0.5", "solver.end_time_us=20", "output.progress=false"};
     opt.out_dir = (root / ("sweep" + std::to_string(round))).string();
     opt.jobs = 1;
     std::string error;
@@ -112,10 +113,18 @@ TEST(Memory, StudyInTheBackgroundWhileEditing) {
     const auto deadline = std::chrono::steady_clock::now() + 120s;
     while (runner.running() && std::chrono::steady_clock::now() < deadline) {
       switch (edits++ % 4) {
-        case 0: w.restart(tiny("yarn.friction=0." + std::to_string(1 + edits % 5))); break;
-        case 1: w.step_once(3); break;
-        case 2: w.pause(); break;
-        default: w.play(); break;
+        case 0:
+          w.restart(tiny("yarn.friction=0." + std::to_string(1 + edits % 5)));
+          break;
+        case 1:
+          w.step_once(3);
+          break;
+        case 2:
+          w.pause();
+          break;
+        default:
+          w.play();
+          break;
       }
       w.sync(v);
       const auto snap = runner.snapshot();  // the progress bar and live chart

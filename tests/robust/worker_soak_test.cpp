@@ -40,9 +40,9 @@ double soak_seconds() {
 }
 
 Scene small_scene(std::vector<std::string> extra = {}) {
-  std::vector<std::string> ov = {"fabric.width_mm=24", "fabric.length_mm=24", "projectile.diameter_mm=4",
-                                 "projectile.mass_g=1", "solver.threads=1", "solver.end_time_us=40",
-                                 "output.history_interval_us=0.25", "output.progress=false"};
+  std::vector<std::string> ov = {
+      "fabric.width_mm=24", "fabric.length_mm=24",   "projectile.diameter_mm=4",        "projectile.mass_g=1",
+      "solver.threads=1",   "solver.end_time_us=40", "output.history_interval_us=0.25", "output.progress=false"};
   ov.insert(ov.end(), extra.begin(), extra.end());
   return load_scene(default_scene_path(), ov);
 }
@@ -81,16 +81,25 @@ TEST(WorkerSoak, RandomEditsWhileStepping) {
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(soak_seconds());
   while (std::chrono::steady_clock::now() < until) {
     switch (rng() % 12) {
-      case 0: w.pause(); break;
-      case 1: w.play(); break;
-      case 2: w.step_once(1 + int(rng() % 5)); break;
-      case 3: w.reset(); break;
+      case 0:
+        w.pause();
+        break;
+      case 1:
+        w.play();
+        break;
+      case 2:
+        w.step_once(1 + int(rng() % 5));
+        break;
+      case 3:
+        w.reset();
+        break;
       case 4:
       case 5: {
         // An edit from the panel: new friction and speed, restart.
         const double mu = 0.05 * double(1 + rng() % 8);
         const int v0 = 150 + int(rng() % 8) * 50;
-        w.restart(small_scene({"yarn.friction=" + std::to_string(mu), "projectile.velocity_mps=" + std::to_string(v0)}));
+        w.restart(
+            small_scene({"yarn.friction=" + std::to_string(mu), "projectile.velocity_mps=" + std::to_string(v0)}));
         ++restarts;
         break;
       }
@@ -104,10 +113,18 @@ TEST(WorkerSoak, RandomEditsWhileStepping) {
         ++refused;
         break;
       }
-      case 8: w.set_pacing({rng() % 3 != 0, 5.0 + double(rng() % 20)}); break;
-      case 9: w.set_threads(kUnderTsan ? 1 : 1 + int(rng() % 2)); break;
-      case 10: w.pause_at(rng() % 2 ? -1.0 : 1e-6 * double(1 + rng() % 20)); break;
-      default: w.toggle_pause(); break;
+      case 8:
+        w.set_pacing({rng() % 3 != 0, 5.0 + double(rng() % 20)});
+        break;
+      case 9:
+        w.set_threads(kUnderTsan ? 1 : 1 + int(rng() % 2));
+        break;
+      case 10:
+        w.pause_at(rng() % 2 ? -1.0 : 1e-6 * double(1 + rng() % 20));
+        break;
+      default:
+        w.toggle_pause();
+        break;
     }
     // The UI frame: sync a few times between edits.
     for (int k = 0; k < 3; ++k) {

@@ -66,8 +66,10 @@ bool well_formed_xml(const std::string& s, std::string* why) {
       const bool self = !tag.empty() && tag.back() == '/';
       const std::string name = tag.substr(0, tag.find_first_of(" \t\n/"));
       if (name.empty()) return fail("empty tag name");
-      if (!self) stack.push_back(name);
-      else if (stack.empty()) root_done = true;
+      if (!self)
+        stack.push_back(name);
+      else if (stack.empty())
+        root_done = true;
     }
     i = end + 1;
   }
@@ -144,8 +146,7 @@ TEST(Chart, PngIsAValidImageAndNotBlank) {
 TEST(Chart, WriteChartPutsTheCsvBesideTheImages) {
   const std::string dir = testing::scratch_dir();
   write_chart(sample_chart(), dir + "/energy");
-  for (const char* ext : {".csv", ".svg", ".png"})
-    EXPECT_TRUE(std::filesystem::exists(dir + "/energy" + ext)) << ext;
+  for (const char* ext : {".csv", ".svg", ".png"}) EXPECT_TRUE(std::filesystem::exists(dir + "/energy" + ext)) << ext;
   const Csv csv = parse_csv(read_text_file(dir + "/energy.csv"));
   EXPECT_EQ(csv.header, (std::vector<std::string>{"series", "impact velocity (m/s)", "energy absorbed (J)"}));
   ASSERT_EQ(csv.rows.size(), 7u);

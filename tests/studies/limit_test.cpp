@@ -65,7 +65,9 @@ TEST(BallisticLimit, ReportsNoBracketAndFailedRuns) {
 }
 
 TEST(LambertJonas, RecoversKnownParametersFromSyntheticPoints) {
-  struct Law { double a, p, vbl; };
+  struct Law {
+    double a, p, vbl;
+  };
   for (const Law law : {Law{0.9, 2.0, 70.0}, Law{0.75, 2.6, 120.0}, Law{1.0, 1.5, 35.0}}) {
     std::vector<double> v, vr;
     for (double f : {1.05, 1.2, 1.5, 2.0, 3.0, 4.0}) {

@@ -23,8 +23,8 @@ inline std::string scratch_dir() {
 // inside the stable range for these small elements. Near its ballistic limit (~60 m/s)
 // the projectile needs ~800 us to push through: end time 1500 us decides every run.
 inline std::vector<std::string> cheap_scene() {
-  return {"fabric.width_mm=20", "fabric.length_mm=20", "projectile.diameter_mm=4", "projectile.mass_g=0.5",
-          "solver.dt_factor=0.3", "solver.end_time_us=1500"};
+  return {"fabric.width_mm=20",    "fabric.length_mm=20",  "projectile.diameter_mm=4",
+          "projectile.mass_g=0.5", "solver.dt_factor=0.3", "solver.end_time_us=1500"};
 }
 
 }  // namespace ravel::studies::testing

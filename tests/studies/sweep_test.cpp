@@ -98,7 +98,8 @@ void expect_results_match_summaries(const std::string& dir, const std::vector<Ca
   const Csv csv = parse_csv(read_text_file(dir + "/results.csv"));
   ASSERT_GE(csv.column("projectile.velocity_mps"), 0);
   ASSERT_GE(csv.column("yarn.friction"), 0);
-  for (const char* k : {"perforated", "residual_velocity_mps", "energy_absorbed_J", "perforation_time_s", "wall_time_s"})
+  for (const char* k :
+       {"perforated", "residual_velocity_mps", "energy_absorbed_J", "perforation_time_s", "wall_time_s"})
     ASSERT_GE(csv.column(k), 0) << k;
   int finished = 0;
   for (const auto& c : cases) finished += case_finished(dir, c);
@@ -111,7 +112,8 @@ void expect_results_match_summaries(const std::string& dir, const std::vector<Ca
                 1e-8 * std::abs(j["energy_absorbed_J"].get<double>()));
     EXPECT_NEAR(std::stod(row[size_t(csv.column("residual_velocity_mps"))]), j["residual_velocity_mps"].get<double>(),
                 1e-8 * std::abs(j["residual_velocity_mps"].get<double>()) + 1e-12);
-    EXPECT_NEAR(std::stod(row[size_t(csv.column("projectile.velocity_mps"))]), j["impact_velocity_mps"].get<double>(), 1e-9);
+    EXPECT_NEAR(std::stod(row[size_t(csv.column("projectile.velocity_mps"))]), j["impact_velocity_mps"].get<double>(),
+                1e-9);
     EXPECT_NEAR(std::stod(row[size_t(csv.column("yarn.friction"))]), j["yarn_friction"].get<double>(), 1e-12);
   }
 }

@@ -20,8 +20,8 @@ namespace {
 
 // 24 x 24 mm, 4 mm 1 g sphere at 400 m/s: perforates in a few tens of microseconds.
 std::vector<std::string> tiny_scene() {
-  return {"fabric.width_mm=24", "fabric.length_mm=24", "projectile.diameter_mm=4", "projectile.mass_g=1",
-          "projectile.velocity_mps=400", "solver.end_time_us=200"};
+  return {"fabric.width_mm=24",  "fabric.length_mm=24",         "projectile.diameter_mm=4",
+          "projectile.mass_g=1", "projectile.velocity_mps=400", "solver.end_time_us=200"};
 }
 
 TEST(Tradeoff, ParetoFrontOnSyntheticPoints) {
@@ -131,7 +131,8 @@ TEST(Stability, ClassifiesWarnings) {
       R"({"status": "completed", "warnings": ["nearest-pair search: yarns slid more than one node in one step 3 times"]})");
   EXPECT_EQ(w.status, "warned");
   EXPECT_EQ(w.cause, "search");
-  const auto p = classify_summary(R"({"status": "completed", "warnings": ["2 crossings found with yarns passed through each other"]})");
+  const auto p = classify_summary(
+      R"({"status": "completed", "warnings": ["2 crossings found with yarns passed through each other"]})");
   EXPECT_EQ(p.status, "warned");
   EXPECT_EQ(p.cause, "pass_through");
   const auto ok = classify_summary(R"({"status": "completed", "warnings": ["3 crossings ravelled out"]})");
@@ -183,7 +184,8 @@ TEST(Suggestions, PicksTheCheapestQualifyingSetting) {
   // When only k = 3 qualifies (k = 2 is off by 2 %), it is the one, for one quantity.
   const auto only3 = tradeoff_suggestions(s, synthetic_json(0.02));
   ASSERT_EQ(only3.size(), 1u);
-  EXPECT_NE(only3[0].find("fabric.yarns_per_element=3 gives residual velocity within 1 % of the reference at 3.3x"), std::string::npos)
+  EXPECT_NE(only3[0].find("fabric.yarns_per_element=3 gives residual velocity within 1 % of the reference at 3.3x"),
+            std::string::npos)
       << only3[0];
   // At 5 %, dt_factor 0.9 qualifies too.
   EXPECT_EQ(tradeoff_suggestions(s, synthetic_json(0.004), 0.05).size(), 2u);
