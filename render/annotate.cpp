@@ -6,30 +6,12 @@
 #include <stdexcept>
 
 #include "render/gl.h"
+#include "render/gl_program.h"
 #include "render/overlay.h"
 
 namespace ravel::render {
 
-const char* embedded_shader(const char* name);  // generated: build/render/embedded_shaders.cpp
-
 namespace {
-
-GLuint compile_shader(GLenum type, const char* name) {
-  const char* src = embedded_shader(name);
-  if (!src) throw std::runtime_error(std::string("shader not embedded: ") + name);
-  GLuint s = glCreateShader(type);
-  glShaderSource(s, 1, &src, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[2048];
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    glDeleteShader(s);
-    throw std::runtime_error(std::string("shader ") + name + ": " + log);
-  }
-  return s;
-}
 
 // A thick segment as two triangles, with round-ish joins (a small square at each end).
 void push_segment(std::vector<OverlayVertex>& v, float x0, float y0, float x1, float y1, float width, Rgba c) {
@@ -67,17 +49,8 @@ struct Annotator::Impl {
 };
 
 Annotator::Annotator() : impl_(std::make_unique<Impl>()) {
-  GLuint vs = compile_shader(GL_VERTEX_SHADER, "overlay.vert"), fs = compile_shader(GL_FRAGMENT_SHADER, "overlay.frag");
   Impl& r = *impl_;
-  r.prog = glCreateProgram();
-  glAttachShader(r.prog, vs);
-  glAttachShader(r.prog, fs);
-  glLinkProgram(r.prog);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(r.prog, GL_LINK_STATUS, &ok);
-  if (!ok) throw std::runtime_error("annotation program does not link");
+  r.prog = link_program("overlay.vert", "overlay.frag");
   glGenVertexArrays(1, &r.vao);
   glGenBuffers(1, &r.vbo);
   glBindVertexArray(r.vao);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "render/gl.h"
+#include "render/gl_program.h"
 #include "render/math.h"
 #include "render/overlay.h"
 
@@ -34,25 +35,6 @@ GLuint compile(GLenum type, const char* name) {
     throw std::runtime_error(std::string("shader ") + name + ": " + log);
   }
   return s;
-}
-
-GLuint link(const char* vert, const char* frag) {
-  GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, frag);
-  GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    char log[4096];
-    glGetProgramInfoLog(p, sizeof log, nullptr, log);
-    glDeleteProgram(p);
-    throw std::runtime_error(std::string("program ") + vert + "+" + frag + ": " + log);
-  }
-  return p;
 }
 
 struct Vertex {
@@ -315,12 +297,12 @@ struct Renderer::Impl {
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
   Impl& r = *impl_;
-  r.bg_prog = link("background.vert", "background.frag");
-  r.tube_prog = link("tube.vert", "tube.frag");
-  r.ribbon_prog = link("ribbon.vert", "ribbon.frag");
-  r.upscale_prog = link("background.vert", "upscale.frag");
-  r.mesh_prog = link("mesh.vert", "mesh.frag");
-  r.overlay_prog = link("overlay.vert", "overlay.frag");
+  r.bg_prog = link_program("background.vert", "background.frag");
+  r.tube_prog = link_program("tube.vert", "tube.frag");
+  r.ribbon_prog = link_program("ribbon.vert", "ribbon.frag");
+  r.upscale_prog = link_program("background.vert", "upscale.frag");
+  r.mesh_prog = link_program("mesh.vert", "mesh.frag");
+  r.overlay_prog = link_program("overlay.vert", "overlay.frag");
   glGenVertexArrays(1, &r.empty_vao);
 
   glGenVertexArrays(1, &r.tube_vao);
@@ -907,6 +889,25 @@ void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int 
   }
   glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, v.data());
   glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(v.size()));
+}
+
+GLuint link_program(const char* vert, const char* frag) {
+  GLuint vs = compile(GL_VERTEX_SHADER, vert), fs = compile(GL_FRAGMENT_SHADER, frag);
+  GLuint p = glCreateProgram();
+  glAttachShader(p, vs);
+  glAttachShader(p, fs);
+  glLinkProgram(p);
+  glDeleteShader(vs);
+  glDeleteShader(fs);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetProgramInfoLog(p, sizeof log, nullptr, log);
+    glDeleteProgram(p);
+    throw std::runtime_error(std::string("program ") + vert + "+" + frag + ": " + log);
+  }
+  return p;
 }
 
 }  // namespace ravel::render
