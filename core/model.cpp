@@ -91,6 +91,7 @@ Model build_model(const Scene& scene) {
   m.friction = y.friction;
   m.friction_penalty = scene.solver.friction_penalty;
   m.split_penetration = scene.solver.split_penetration;
+  m.projectile_holds = scene.solver.projectile_holds;
   m.contact_iterations = scene.solver.contact_iterations;
 
   const double node_mass = f.node_mass_kg * double(k) * double(k);

@@ -83,6 +83,7 @@ struct Model {
   double friction = 0.2;
   double friction_penalty = 0.25;
   bool split_penetration = true;
+  bool projectile_holds = true;
   int contact_iterations = 1;
 
   // --- material

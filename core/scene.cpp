@@ -284,6 +284,10 @@ std::vector<KeyDef> make_defs() {
        "true: penetration left from earlier steps is removed by moving the nodes (no energy injected); false: the "
        "paper's velocity-only correction",
        solver.split_penetration);
+  BOOL("solver.projectile_holds",
+       "true: a node the projectile pushed out does not yield into it under yarn contact (the push goes to the "
+       "projectile); false: the yarn contact moves it freely",
+       solver.projectile_holds);
   NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0,
       solver.friction_penalty);
   {

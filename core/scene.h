@@ -72,6 +72,7 @@ struct SolverParams {
   int contact_iterations = 1;      // N of Eq 16-17
   double friction_penalty = 0.25;  // alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12)
   bool split_penetration = true;   // resolve penetration left from earlier steps by moving nodes, not by velocity
+  bool projectile_holds = true;    // nodes on the projectile do not yield into it under yarn contact
   SymmetryMode symmetry = SymmetryMode::automatic;
   Precision precision = Precision::double_precision;
   double end_time_s = 150e-6;

@@ -49,6 +49,8 @@ class SolverT final : public Solver {
     dv_friction_.assign(n, V3::Zero());
     dv_pfriction_.assign(n, V3::Zero());
     dx_contact_.assign(n, V3::Zero());
+    held_n_.assign(n, V3::Zero());
+    held_imp_.assign(n, V3::Zero());
     for (int i = 0; i < n; ++i) {
       x_[i] = model_.x0[i].template cast<Real>();
       v_[i].setZero();
@@ -112,6 +114,7 @@ class SolverT final : public Solver {
     integrate();                                    // Eq 1-2
     projectile_contact();                           // Eq 18-22
     if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
+    release_held();                                 // the yarn contact's push on held nodes -> projectile
     if (!model_.crossings.empty() && steps_ % kPenetrationCheckEvery == 0) residual_penetration();
     finish_step();
   }
@@ -405,6 +408,9 @@ class SolverT final : public Solver {
       }
     }
   }
+  // A position shift dx changes the stored energy by -(f_before + f_after)/2 . dx to second
+  // order; f_after is the next step's force, so that half is booked then.
+  static constexpr double kShiftLate = 0.5;
   static constexpr long kBalanceWindow = 64;  // steps per window of the drift/instability test
   double balance_window_[8] = {0, 0, 0, 0, 0, 0, 0, 0};
 
@@ -413,14 +419,16 @@ class SolverT final : public Solver {
   void integrate() {
     const int n = model_.node_count;
     const Real dt = Real(model_.dt);
-    double maxr2 = 0;
+    double maxr2 = 0, w_shift = 0;
 
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) if (threads_ > 1)
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) reduction(+ : w_shift) if (threads_ > 1)
     for (int i = 0; i < n; ++i) {
       v_prev_[i] = v_[i];
       dv_contact_[i].setZero();
       dv_friction_[i].setZero();
       dv_pfriction_[i].setZero();
+      // The second half of last step's shift work, with the force after the shift (see finish_step).
+      w_shift += double(f_[i].dot(dx_contact_[i]));
       dx_contact_[i].setZero();
       const std::uint8_t fx = model_.fixed[i];
       if (fx == fix_all) continue;
@@ -444,6 +452,7 @@ class SolverT final : public Solver {
       x_[i] += dt * dv;
     }
     xp_ += dt * vp_;
+    contact_cum_ += kShiftLate * w_shift;
     if (!std::isfinite(maxr2))
       fail("non_finite", "a yarn node position became NaN/infinite");
     else if (!(maxr2 < escape_radius2_))
@@ -536,6 +545,8 @@ class SolverT final : public Solver {
   // correction is continuous in the state and a mirror-symmetric state gets a
   // mirror-symmetric correction (see docs/MODEL.md).
   static constexpr double kTieBand = 0.02;
+  // The least share of a crossing's mobility the projectile's hold may leave (see crossing_pass).
+  static constexpr double kMinHeldMobility = 0.25;
   struct ContactGeom {
     bool ok = false;
     int sw = 0, sf = 0;  // the first closest pair (for the end-of-yarn tests)
@@ -698,6 +709,7 @@ class SolverT final : public Solver {
     Real fw[4];
     V3 F;  // friction impulse on the weft contact point (Eq 15)
     bool has_n, has_f, has_s;
+    bool hold;  // nodes the projectile holds do not yield into it (release_held)
   };
 
   void yarn_contact() {
@@ -742,6 +754,7 @@ class SolverT final : public Solver {
       if (ev & ev_ravel) note(diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
       if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
       if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
+      if (ev & ev_separated) ++diag_.separated;
     }
     double fsum = 0;
     int sliding = 0, stuck = 0;
@@ -763,24 +776,30 @@ class SolverT final : public Solver {
       if (r.has_n)
         for (int k = 0; k < 6; ++k) {
           const int i = r.node[k];
-          if (i >= lo && i < hi && r.w[k] != Real(0)) apply_impulse(i, r.w[k] * r.P, dv_contact_);
+          if (i >= lo && i < hi && r.w[k] != Real(0)) apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
         }
       if (r.has_f)
         for (int k = 0; k < 4; ++k) {
           const int i = r.fnode[k];
-          if (i >= lo && i < hi && r.fw[k] != Real(0)) apply_impulse(i, r.fw[k] * r.F, dv_friction_);
+          if (i >= lo && i < hi && r.fw[k] != Real(0)) apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
         }
       if (r.has_s)
         for (int k = 0; k < 6; ++k) {
           const int i = r.node[k];
-          if (i >= lo && i < hi && r.w[k] != Real(0)) shift_node(i, r.w[k] * r.S);
+          if (i >= lo && i < hi && r.w[k] != Real(0)) shift_node(i, r.w[k] * r.S, r.hold);
         }
     }
   }
 
-  void apply_impulse(int i, const V3& P, std::vector<V3>& acc) {
+  void apply_impulse(int i, V3 P, std::vector<V3>& acc, bool hold) {
     const Real im = Real(model_.inv_mass[i]);
     if (im == Real(0)) return;
+    const Real pn = P.dot(held_n_[i]);
+    if (hold && pn < Real(0)) {
+      // Held by the projectile: the part pushing into it passes to the projectile.
+      held_imp_[i] += pn * held_n_[i];
+      P -= pn * held_n_[i];
+    }
     V3 dv = im * P;
     const std::uint8_t fx = model_.fixed[i];
     if (fx & fix_x) dv.x() = 0;
@@ -792,10 +811,12 @@ class SolverT final : public Solver {
   }
 
   // Move a node by a mass-weighted shift (no velocity change); recorded for the ledger.
-  void shift_node(int i, const V3& S) {
+  void shift_node(int i, const V3& S, bool hold) {
     const Real im = Real(model_.inv_mass[i]);
     if (im == Real(0)) return;
     V3 dx = im * S;
+    const Real dn = dx.dot(held_n_[i]);
+    if (hold && dn < Real(0)) dx -= dn * held_n_[i];  // not into the projectile that holds it
     const std::uint8_t fx = model_.fixed[i];
     if (fx & fix_x) dx.x() = 0;
     if (fx & fix_y) dx.y() = 0;
@@ -807,7 +828,7 @@ class SolverT final : public Solver {
   // Tracking, normal correction and friction of one crossing in one pass.
   void crossing_pass(int c, Real alpha, bool last) {
     CrossingImpulse& r = impulses_[c];
-    r.has_n = r.has_f = r.has_s = false;
+    r.has_n = r.has_f = r.has_s = r.hold = false;
     if (!cr_active_[c]) return;
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
@@ -847,6 +868,15 @@ class SolverT final : public Solver {
       delta = D - g.dist;
       u = dlen > Real(1e-12) * D ? V3(g.d / dlen) : n;
     } else {
+      if (g.dist > D && cr_gap_[c] > 0) {
+        // On the "wrong" side by more than D, but apart (|d| > D) at the end of the last
+        // step too: the yarns never came within D of each other, so they did not pass
+        // through each other (that takes far less than D of relative motion per step); the
+        // side test flipped because a tracked segment turned over (flung ends after
+        // perforation). There is no contact to keep: released quietly.
+        release(c, ev_separated);
+        return;
+      }
       if (g.dist > D) {
         // Passed through by more than a yarn diameter: a correction of more than 2D in one
         // step; the nearest-pair assumption is broken here.
@@ -865,9 +895,21 @@ class SolverT final : public Solver {
       u = un > Real(0) ? V3(u / un) : n;
     }
     // Effective inverse mass of the relative motion of the two contact points.
-    Real winv = 0;
-    for (int k = 0; k < 6; ++k)
-      if (r.node[k] >= 0) winv += r.w[k] * r.w[k] * Real(model_.inv_mass[r.node[k]]);
+    // A node the projectile holds does not yield into it (see release_held).
+    // Where the projectile holds both yarns so that they could only separate into it, the
+    // rigid body cannot resolve the contact: the yarn contact then moves them as before.
+    Real winv = 0, winv_free = 0;
+    for (int k = 0; k < 6; ++k) {
+      const int i = r.node[k];
+      if (i < 0) continue;
+      const Real un = u.dot(held_n_[i]);
+      const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
+      const Real wi = r.w[k] * r.w[k] * Real(model_.inv_mass[i]);
+      winv += wi * free;
+      winv_free += wi;
+    }
+    r.hold = winv >= Real(kMinHeldMobility) * winv_free;
+    if (!r.hold) winv = winv_free;
     if (winv <= Real(0)) return;  // every node clamped
     if (delta > Real(0)) {
       // Eq 9-10 with node masses: a relative displacement alpha * delta within the step.
@@ -970,6 +1012,10 @@ class SolverT final : public Solver {
       const double sd = model_.shape.sdf(rel, nrm);
       if (sd > 0) continue;
       ++touching;
+      if (model_.projectile_holds) {
+        held_n_[i] = nrm;
+        held_list_.push_back(i);
+      }
       const double m = model_.mass[i];
       // Eq 19: push the node back onto the surface within one step (with the split, only
       // the part this step's approach made is a velocity change; see yarn contact).
@@ -993,7 +1039,7 @@ class SolverT final : public Solver {
       const Real vtn = vt.norm();
       V3 dv_t = V3::Zero();
       if (vtn > Real(0)) {
-        const Real cap = Real(mu_p) * (pen / dt);  // mu_p |f_n| dt / m, f_n of Eq 19
+        const Real cap = Real(mu_p) * push;  // mu_p |f_n| dt / m, f_n of Eq 19
         dv_t = -std::min(vtn, cap) * (vt / vtn);
       }
       const std::uint8_t fx = model_.fixed[i];
@@ -1022,15 +1068,38 @@ class SolverT final : public Solver {
       last_contact_time_ = time_ + model_.dt;
       had_contact_ = true;
     }
-    const V3 impulse_on_proj = impulse_normal + impulse_fric;
+    proj_impulse_ = impulse_normal + impulse_fric;
     nodes_on_projectile_ = touching;
-    projectile_force_ = double(impulse_on_proj.norm() / dt);
+    projectile_force_ = double(proj_impulse_.norm() / dt);
   }
 
   double fabric_ke() const {
     double ke = 0;
     for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(v_[i].squaredNorm());
     return ke;
+  }
+
+  // A node the projectile pushed out this step rests on a rigid body: the yarn contact's
+  // corrections do not move it back into the projectile (apply_impulse, shift_node, and the
+  // effective mass in crossing_pass); the impulse they would have pushed it in with acts on
+  // the projectile instead. Summed here in node order (deterministic for any thread count).
+  void release_held() {
+    if (held_list_.empty()) return;
+    V3 imp = V3::Zero();
+    for (int i : held_list_) {
+      imp += held_imp_[i];
+      held_imp_[i].setZero();
+      held_n_[i].setZero();
+    }
+    held_list_.clear();
+    V3 dvp = imp / Real(model_.projectile_mass);
+    if (model_.mirror_x) dvp.x() = 0;
+    if (model_.mirror_y) dvp.y() = 0;
+    const V3 vp_old = vp_;
+    vp_ += dvp;
+    xp_ += Real(model_.dt) * dvp;
+    contact_cum_ -= 0.5 * model_.projectile_mass * double(dvp.dot(vp_old + vp_));
+    projectile_force_ = double((proj_impulse_ + imp).norm()) / model_.dt;
   }
 
   // The interpenetration left at the end of a step (after every correction), sampled every
@@ -1079,7 +1148,7 @@ class SolverT final : public Solver {
     // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
     for (const auto& [i, F] : f_ext_) external_cum_ += 0.5 * double(model_.dt) * double(F.dot(v_prev_[i] + v_[i]));
     contact_cum_ -= w_contact;
-    contact_cum_ += w_shift;
+    contact_cum_ += (1 - kShiftLate) * w_shift;
     friction_cum_ -= w_friction;
     pfriction_cum_ -= w_pfriction;
     ke_fabric_half_ = ke;
@@ -1106,6 +1175,11 @@ class SolverT final : public Solver {
   ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
   std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism
+  // Nodes the projectile pushed out this step: the surface normal (zero: not held), the
+  // impulse the yarn contact passed through them to the projectile, and their list.
+  std::vector<V3> held_n_, held_imp_;
+  std::vector<int> held_list_;
+  V3 proj_impulse_ = V3::Zero();  // the projectile contact's impulse on the projectile this step
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
   std::vector<V3> elem_force_, bend_force_;
@@ -1116,7 +1190,7 @@ class SolverT final : public Solver {
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
   std::vector<CrossingImpulse> impulses_;
-  enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8 };
+  enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8, ev_separated = 16 };
   V3 xp_, vp_;
   double ke_half_ = 0, ke_fabric_half_ = 0;
   double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0, released_prev_ = 0;

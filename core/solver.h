@@ -39,6 +39,7 @@ struct ContactDiagnostics {
   long ravelled = 0;        // a yarn slipped off the end of its partner: crossing released
   long passed_through = 0;  // yarns found passed through each other by more than D
   long lost_segments = 0;   // both adjoining segments broken: crossing released
+  long separated = 0;       // side test flipped while the yarns were apart: released, not a fault
   double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
   int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
   double max_penetration = 0;  // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
