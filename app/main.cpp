@@ -32,9 +32,11 @@ void usage() {
 
 int main(int argc, char** argv) {
   using namespace ravel::app;
-  // Solver threads sleep rather than spin at the step's barriers (see app/omp_env.h).
-  ensure_passive_omp_wait(argv);
+  // How solver threads wait at the step's barriers: spin briefly on an idle machine, sleep
+  // on a loaded one or in the GUI (see app/omp_env.h).
   std::string cmd = argc > 1 ? argv[1] : "";
+  const bool opens_gui = cmd.empty() || cmd == "gui" || (cmd.size() > 5 && cmd.substr(cmd.size() - 5) == ".toml");
+  choose_omp_wait_policy(argv, opens_gui);
   Args rest;
   for (int i = 2; i < argc; ++i) rest.push_back(argv[i]);
   if (cmd == "help" || cmd == "--help" || cmd == "-h") {

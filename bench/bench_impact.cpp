@@ -12,7 +12,7 @@
 #include "simulation.h"
 
 int main(int argc, char** argv) {
-  ravel::app::ensure_passive_omp_wait(argv);  // as the ravel executable does
+  ravel::app::choose_omp_wait_policy(argv);  // as the ravel executable does
   std::vector<std::string> ov{"projectile.velocity_mps=260", "output.progress=false"};
   int repeat = 1;
   std::vector<std::vector<std::string>> cases;
@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,"
-      "residual_velocity_mps\n");
+      "residual_velocity_mps,omp_spincount\n");
   for (int r = 0; r < repeat; ++r) {
     ravel::Scene scene = ravel::load_scene(ravel::default_scene_path(), ov);
     ravel::Simulation sim(scene);
@@ -33,10 +33,11 @@ int main(int argc, char** argv) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto s = sim.summary();
     const double ns = double(s.node_count) * double(s.step_count);
-    std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f\n", s.model.c_str(), s.contact_model.c_str(),
+    const char* spin = std::getenv("GOMP_SPINCOUNT");
+    std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f,%s\n", s.model.c_str(), s.contact_model.c_str(),
                 scene.solver.precision == ravel::Precision::double_precision ? "double" : "float", scene.solver.threads,
                 s.node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
-                s.residual_velocity_mps);
+                s.residual_velocity_mps, spin ? spin : "default");
   }
   return 0;
 }

@@ -18,19 +18,19 @@ bench="$build/bench/bench_impact"
 out="$here/node_steps.csv"
 [ -x "$bench" ] || { echo "node_steps.sh: $bench not found (build first)" >&2; exit 1; }
 
-# libgomp reads OMP_WAIT_POLICY when the program starts, before main() could set it: say
-# it here. Spinning waits (the libgomp default) on a loaded machine made 2 threads burn
-# 14-20x the CPU of 1 thread and run 9-10x slower (measured with this script, load 9-11).
-export OMP_WAIT_POLICY="${OMP_WAIT_POLICY:-passive}"
+# How the solver threads wait at barriers is chosen by bench_impact at start-up from the
+# machine's load, as the ravel executable does (app/omp_env.h): spin up to 20,000 rounds
+# when there is a core for each thread, sleep otherwise. The choice is in each row
+# (omp_spincount). Set OMP_WAIT_POLICY / GOMP_SPINCOUNT to force one.
 
 tmp="$(mktemp)"
 trap 'rm -f "$tmp" "$tmp.t"' EXIT
 {
   echo "# ravel node-steps per second: default scene (twaron_ct716) at 260 m/s to perforation"
   echo "# date $(date -u +%Y-%m-%dT%H:%MZ), host $(hostname), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-  echo "# OMP_WAIT_POLICY=$OMP_WAIT_POLICY"
+  echo "# OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-chosen by bench_impact} GOMP_SPINCOUNT=${GOMP_SPINCOUNT:-chosen by bench_impact}"
   echo "# wall_s: elapsed; user_s/sys_s: CPU time of the process (all threads); load1: 1-minute load average just before the run"
-  echo "model,precision,threads,repeat,nodes,steps,wall_s,user_s,sys_s,node_steps_per_s,node_steps_per_cpu_s,perforated,residual_velocity_mps,load1"
+  echo "model,precision,threads,repeat,nodes,steps,wall_s,user_s,sys_s,node_steps_per_s,node_steps_per_cpu_s,perforated,residual_velocity_mps,load1,omp_spincount"
 } > "$tmp"
 for r in $(seq 1 "$repeats"); do
   for model in sliding pin_jointed; do
@@ -42,11 +42,11 @@ for r in $(seq 1 "$repeats"); do
         read -r real user sys < "$tmp.time"
         # bench_impact: model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,residual_velocity_mps
         line="$(tail -n1 "$tmp.t")"
-        IFS=, read -r _m contact _p _t nodes steps _sim wall nsps _ns perf vr <<< "$line"
+        IFS=, read -r _m contact _p _t nodes steps _sim wall nsps _ns perf vr spin <<< "$line"
         cpu="$(awk -v u="$user" -v s="$sys" 'BEGIN{print u+s}')"
         per_cpu="$(awk -v n="$nodes" -v k="$steps" -v c="$cpu" 'BEGIN{printf "%.4g", n*k/c}')"
-        echo "$contact,$prec,$th,$r,$nodes,$steps,$wall,$user,$sys,$nsps,$per_cpu,$perf,$vr,$load" >> "$tmp"
-        echo "  $contact $prec threads=$th repeat $r: wall $wall s, cpu $cpu s, $nsps node-steps/s (load $load)" >&2
+        echo "$contact,$prec,$th,$r,$nodes,$steps,$wall,$user,$sys,$nsps,$per_cpu,$perf,$vr,$load,$spin" >> "$tmp"
+        echo "  $contact $prec threads=$th repeat $r: wall $wall s, cpu $cpu s, $nsps node-steps/s (load $load, spin $spin)" >&2
       done
     done
   done

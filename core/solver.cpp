@@ -50,6 +50,10 @@ class SolverT final : public Solver {
     dv_pfriction_.assign(n, V3::Zero());
     dx_contact_.assign(n, V3::Zero());
     held_n_.assign(n, V3::Zero());
+    held_flag_.assign(n, 0);
+    sum_n_.assign(n, V3::Zero());
+    sum_f_.assign(n, V3::Zero());
+    sum_s_.assign(n, V3::Zero());
     held_imp_.assign(n, V3::Zero());
     for (int i = 0; i < n; ++i) {
       x_[i] = model_.x0[i].template cast<Real>();
@@ -768,7 +772,9 @@ class SolverT final : public Solver {
     stuck_count_ = stuck;
   }
 
-  // Apply this pass's corrections to the nodes in [lo, hi), in crossing order.
+  // Apply this pass's corrections to the nodes in [lo, hi): gathered per node in crossing
+  // order, then applied once per node. Nodes the projectile holds take each correction
+  // separately (the hold projects out the part pushing into the projectile).
   void apply_pass(int lo, int hi) {
     const int nc = int(model_.crossings.size());
     for (int c = 0; c < nc; ++c) {
@@ -776,18 +782,49 @@ class SolverT final : public Solver {
       if (r.has_n)
         for (int k = 0; k < 6; ++k) {
           const int i = r.node[k];
-          if (i >= lo && i < hi && r.w[k] != Real(0)) apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
+          if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
+          if (held_flag_[i])
+            apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
+          else
+            sum_n_[i] += r.w[k] * r.P;
         }
       if (r.has_f)
         for (int k = 0; k < 4; ++k) {
           const int i = r.fnode[k];
-          if (i >= lo && i < hi && r.fw[k] != Real(0)) apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
+          if (i < lo || i >= hi || r.fw[k] == Real(0)) continue;
+          if (held_flag_[i])
+            apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
+          else
+            sum_f_[i] += r.fw[k] * r.F;
         }
       if (r.has_s)
         for (int k = 0; k < 6; ++k) {
           const int i = r.node[k];
-          if (i >= lo && i < hi && r.w[k] != Real(0)) shift_node(i, r.w[k] * r.S, r.hold);
+          if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
+          if (held_flag_[i])
+            shift_node(i, r.w[k] * r.S, r.hold);
+          else
+            sum_s_[i] += r.w[k] * r.S;
         }
+    }
+    const Real dt = Real(model_.dt);
+    for (int i = lo; i < hi; ++i) {
+      const Real im = Real(model_.inv_mass[i]);
+      const std::uint8_t fx = model_.fixed[i];
+      V3 dvn = im * sum_n_[i], dvf = im * sum_f_[i], dx = im * sum_s_[i];
+      sum_n_[i].setZero();
+      sum_f_[i].setZero();
+      sum_s_[i].setZero();
+      if (fx) {
+        for (int a = 0; a < 3; ++a)
+          if (fx & (1 << a)) dvn[a] = dvf[a] = dx[a] = 0;
+      }
+      const V3 dv = dvn + dvf;
+      v_[i] += dv;
+      dv_contact_[i] += dvn;
+      dv_friction_[i] += dvf;
+      x_[i] += dt * dv + dx;
+      dx_contact_[i] += dx;
     }
   }
 
@@ -902,7 +939,7 @@ class SolverT final : public Solver {
     for (int k = 0; k < 6; ++k) {
       const int i = r.node[k];
       if (i < 0) continue;
-      const Real un = u.dot(held_n_[i]);
+      const Real un = held_flag_[i] ? u.dot(held_n_[i]) : Real(0);
       const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
       const Real wi = r.w[k] * r.w[k] * Real(model_.inv_mass[i]);
       winv += wi * free;
@@ -1014,6 +1051,7 @@ class SolverT final : public Solver {
       ++touching;
       if (model_.projectile_holds) {
         held_n_[i] = nrm;
+        held_flag_[i] = 1;
         held_list_.push_back(i);
       }
       const double m = model_.mass[i];
@@ -1090,6 +1128,7 @@ class SolverT final : public Solver {
       imp += held_imp_[i];
       held_imp_[i].setZero();
       held_n_[i].setZero();
+      held_flag_[i] = 0;
     }
     held_list_.clear();
     V3 dvp = imp / Real(model_.projectile_mass);
@@ -1179,6 +1218,8 @@ class SolverT final : public Solver {
   // impulse the yarn contact passed through them to the projectile, and their list.
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
+  std::vector<std::uint8_t> held_flag_;  // held_n_ is nonzero (a compact test for the hot loops)
+  std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections gathered per node (apply_pass)
   V3 proj_impulse_ = V3::Zero();  // the projectile contact's impulse on the projectile this step
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
