@@ -66,7 +66,13 @@ const Rendered& rendered(const std::string& name) {
     opt.quick = true;
     opt.width = 720;
     opt.height = 450;
-    const std::string dir = std::string(RAVEL_DEMO_TEST_OUT) + "/" + name;
+    // One folder per test: ctest runs the tests of this file as parallel processes, and
+    // two of them rendering the same demo into one folder removed each other's images.
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string test = std::string(info->test_suite_name()) + "." + info->name();
+    for (char& ch : test)
+      if (ch == '/') ch = '_';
+    const std::string dir = std::string(RAVEL_DEMO_TEST_OUT) + "/" + test + "/" + name;
     fs::remove_all(dir);
     r.result = render_demo(*r.demo, dir, opt);
     for (const auto& img : r.result.images) r.images.push_back(load_png(img.path));
