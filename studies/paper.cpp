@@ -728,11 +728,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     md << "- What quick changes: 8 impact velocities instead of 17; the ballistic-limit searches run on a coarsened "
           "mesh (`fabric.yarns_per_element=2`: every modelled yarn lumps two real yarns, about 4x fewer nodes and a 2x "
           "larger stable step), to a 4 m/s tolerance, for 6 friction values instead of 9. The velocity studies "
-          "(Fig. 8, 11-15) use the full mesh: coarsening them roughly doubles the energy absorbed at 260 m/s and "
-          "multiplies the friction work by more than ten (measured at 260 m/s, mu = 0.2: 75 J absorbed and 41 J of "
-          "friction work coarsened, 36 J and 2.8 J on the full mesh). The coarsened BL numbers (Fig. 16, 17) are a "
-          "preview; run "
-          "without `--quick` for the model's answer.\n";
+          "(Fig. 8, 11-15) use the full mesh: coarsening them moves the energy absorbed at 260 m/s by about 30 % "
+          "and multiplies the friction work by more than three (measured by `ravel tradeoff` on 2026-11-22 at "
+          "260 m/s, mu = 0.2: 44 J absorbed and 25 J of friction work coarsened, 63 J and 7 J on the full mesh). "
+          "The coarsened BL numbers (Fig. 16, 17) are a preview; run without `--quick` for the model's answer.\n";
   if (!opt.overrides.empty()) {
     md << "- User overrides:";
     for (const auto& o : opt.overrides) md << " `" << o << "`";
