@@ -1218,9 +1218,9 @@ class SolverT final : public Solver {
   // impulse the yarn contact passed through them to the projectile, and their list.
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
-  std::vector<std::uint8_t> held_flag_;  // held_n_ is nonzero (a compact test for the hot loops)
+  std::vector<std::uint8_t> held_flag_;    // held_n_ is nonzero (a compact test for the hot loops)
   std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections gathered per node (apply_pass)
-  V3 proj_impulse_ = V3::Zero();  // the projectile contact's impulse on the projectile this step
+  V3 proj_impulse_ = V3::Zero();           // the projectile contact's impulse on the projectile this step
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
   std::vector<V3> elem_force_, bend_force_;

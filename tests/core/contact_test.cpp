@@ -251,9 +251,9 @@ struct PullOut {
   int released = 0, crossings = 0;
 };
 PullOut pull_out(double mu) {
-  Scene sc = test::scene_with({"fabric.width_mm=10", "fabric.length_mm=10", "solver.symmetry=full",
-                               "yarn.breakable=false", "projectile.diameter_mm=2", "projectile.mass_g=0.1",
-                               "yarn.friction=" + std::to_string(mu)});
+  Scene sc =
+      test::scene_with({"fabric.width_mm=10", "fabric.length_mm=10", "solver.symmetry=full", "yarn.breakable=false",
+                        "projectile.diameter_mm=2", "projectile.mass_g=0.1", "yarn.friction=" + std::to_string(mu)});
   Simulation sim(sc);
   Solver& so = sim.solver();
   const Model& m = so.model();
@@ -291,12 +291,12 @@ TEST(Friction, PullOutForceRisesPeaksAndDropsAndThePeakGrowsWithMu) {
   for (double mu : {0.0, 0.1, 0.2, 0.4}) {
     SCOPED_TRACE("mu " + std::to_string(mu));
     const PullOut r = pull_out(mu);
-    EXPECT_GT(r.peak_N, 1.0);                  // measured 5 N at mu = 0 .. 31 N at 0.4
-    EXPECT_LT(r.peak_at_mm, 4.0);              // rises to the peak within the first crossings
+    EXPECT_GT(r.peak_N, 1.0);                        // measured 5 N at mu = 0 .. 31 N at 0.4
+    EXPECT_LT(r.peak_at_mm, 4.0);                    // rises to the peak within the first crossings
     EXPECT_LT(std::abs(r.last_N), 0.05 * r.peak_N);  // and drops once the yarn is out
     EXPECT_GE(r.crossings, 10);
-    EXPECT_EQ(r.released, r.crossings);        // every crossing of the pulled yarn let go
-    EXPECT_GT(r.peak_N, 1.15 * previous);      // the peak grows with mu
+    EXPECT_EQ(r.released, r.crossings);    // every crossing of the pulled yarn let go
+    EXPECT_GT(r.peak_N, 1.15 * previous);  // the peak grows with mu
     previous = r.peak_N;
   }
 }

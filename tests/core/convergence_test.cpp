@@ -39,7 +39,7 @@ TEST(Convergence, SlidingImpactConvergesInDt) {
   const State a = impact_at_70us("solver.dt_factor=0.5");
   const State b = impact_at_70us("solver.dt_factor=0.25");
   const State c = impact_at_70us("solver.dt_factor=0.125");
-  EXPECT_NEAR(a.v, c.v, 0.2);                          // 0.1 % of the speed lost so far (39 m/s)
+  EXPECT_NEAR(a.v, c.v, 0.2);                           // 0.1 % of the speed lost so far (39 m/s)
   EXPECT_LT(std::abs(b.v - c.v), std::abs(a.v - c.v));  // and it converges
   EXPECT_NEAR(a.max_strain, c.max_strain, 0.02 * c.max_strain);
   EXPECT_NEAR(a.friction_J, c.friction_J, 0.2 * c.friction_J);  // ~1 J; stick chatter is first order
