@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <thread>
 
 #include "results.h"
 
@@ -65,7 +67,7 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
   return a;
 }
 
-Scene load_scene_from(const CommonArgs& a) {
+std::string scene_path_from(const CommonArgs& a) {
   std::string path = a.scene_path;
   if (path.empty()) path = default_scene_path();
   // A bare name finds the shipped scene: `ravel run twaron_ct716`.
@@ -74,9 +76,23 @@ Scene load_scene_from(const CommonArgs& a) {
         assets_dir() + "/scenes/" + path + (path.size() > 5 && path.substr(path.size() - 5) == ".toml" ? "" : ".toml");
     if (std::filesystem::exists(shipped)) path = shipped;
   }
+  return path;
+}
+
+Scene load_scene_from(const CommonArgs& a) {
   std::vector<std::string> ov = a.overrides;
   if (a.threads >= 0) ov.push_back("solver.threads=" + std::to_string(a.threads));
-  return load_scene(path, ov);
+  return load_scene(scene_path_from(a), ov);
+}
+
+int jobs_from(const CommonArgs& a) {
+  auto it = a.flags.find("jobs");
+  if (it == a.flags.end()) return std::max(1u, std::thread::hardware_concurrency());
+  char* end = nullptr;
+  const long j = std::strtol(it->second.c_str(), &end, 10);
+  if (it->second.empty() || *end || j < 1 || j > 1024)
+    throw UsageError("--jobs: expected a whole number 1..1024, got '" + it->second + "'");
+  return int(j);
 }
 
 bool has_switch(const CommonArgs& a, const std::string& name) {

@@ -32,8 +32,15 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
                       const std::vector<std::string>& switch_flags = {},
                       const std::vector<std::string>& repeatable = {});
 
-// Load the scene the arguments name (default scene when none), with --set and --threads.
+// The scene file the arguments name: the default scene when none, a bare name finds the
+// shipped scene of that name.
+std::string scene_path_from(const CommonArgs& a);
+
+// Load the scene the arguments name (scene_path_from), with --set and --threads.
 Scene load_scene_from(const CommonArgs& a);
+
+// --jobs N (1..1024; default: one per core). Throws UsageError.
+int jobs_from(const CommonArgs& a);
 
 bool has_switch(const CommonArgs& a, const std::string& name);
 

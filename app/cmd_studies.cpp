@@ -13,7 +13,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
-#include <thread>
 
 #include "chart.h"
 #include "cli.h"
@@ -34,17 +33,6 @@ void install_signal_handlers();
 
 namespace {
 
-// The scene file the arguments name (the rules of load_scene_from).
-std::string resolved_scene_path(const CommonArgs& a) {
-  std::string path = a.scene_path.empty() ? default_scene_path() : a.scene_path;
-  if (!std::filesystem::exists(path)) {
-    const bool has_ext = path.size() > 5 && path.substr(path.size() - 5) == ".toml";
-    const std::string shipped = assets_dir() + "/scenes/" + path + (has_ext ? "" : ".toml");
-    if (std::filesystem::exists(shipped)) path = shipped;
-  }
-  return path;
-}
-
 double parse_positive(const CommonArgs& a, const std::string& flag, double fallback) {
   auto it = a.flags.find(flag);
   if (it == a.flags.end()) return fallback;
@@ -53,16 +41,6 @@ double parse_positive(const CommonArgs& a, const std::string& flag, double fallb
   if (it->second.empty() || *end || !std::isfinite(v) || v <= 0)
     throw UsageError("--" + flag + ": expected a positive number, got '" + it->second + "'");
   return v;
-}
-
-int parse_jobs(const CommonArgs& a) {
-  auto it = a.flags.find("jobs");
-  if (it == a.flags.end()) return std::max(1u, std::thread::hardware_concurrency());
-  char* end = nullptr;
-  const long j = std::strtol(it->second.c_str(), &end, 10);
-  if (it->second.empty() || *end || j < 1 || j > 1024)
-    throw UsageError("--jobs: expected a whole number 1..1024, got '" + it->second + "'");
-  return int(j);
 }
 
 // Fail before anything is written when --out cannot be used.
@@ -94,11 +72,11 @@ int cmd_sweep(const Args& args) {
       throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
     check_out_dir(a.out_dir);
     studies::SweepOptions opt;
-    opt.scene_path = resolved_scene_path(a);
+    opt.scene_path = scene_path_from(a);
     opt.overrides = a.overrides;
     load_scene(opt.scene_path, opt.overrides);  // bad scene / --set: fail now
     opt.out_dir = a.out_dir;
-    opt.jobs = parse_jobs(a);
+    opt.jobs = jobs_from(a);
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
     if (a.flags.count("shard")) opt.shard = studies::parse_shard(a.flags["shard"]);
     std::vector<studies::Vary> vary;
@@ -161,7 +139,7 @@ int cmd_limit(const Args& args) {
   try {
     CommonArgs a = parse_args(args, {"tolerance", "start", "max-runs"}, {"no-fit", "quiet"});
     check_out_dir(a.out_dir);
-    const std::string scene_path = resolved_scene_path(a);
+    const std::string scene_path = scene_path_from(a);
     std::vector<std::string> ov = a.overrides;
     if (a.threads >= 0) ov.push_back("solver.threads=" + std::to_string(a.threads));
     const Scene scene = load_scene(scene_path, ov);
@@ -254,12 +232,12 @@ int cmd_paper(const Args& args) {
     CommonArgs a = parse_args(args, {"jobs"}, {"quick", "quiet"});
     check_out_dir(a.out_dir);
     studies::PaperOptions opt;
-    opt.scene_path = resolved_scene_path(a);
+    opt.scene_path = scene_path_from(a);
     opt.overrides = a.overrides;
     if (a.threads >= 0) opt.overrides.push_back("solver.threads=" + std::to_string(a.threads));
     load_scene(opt.scene_path, opt.overrides);
     opt.out_dir = a.out_dir;
-    opt.jobs = parse_jobs(a);
+    opt.jobs = jobs_from(a);
     opt.quick = has_switch(a, "quick");
     const bool verbose = progress_wanted(a);
 #ifdef RAVEL_HAVE_RENDER

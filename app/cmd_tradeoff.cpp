@@ -10,9 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <sstream>
-#include <thread>
 
 #include "chart.h"
 #include "cli.h"
@@ -29,26 +27,6 @@ std::atomic<bool>& interrupt_flag();
 void install_signal_handlers();
 
 namespace {
-
-std::string scene_file(const CommonArgs& a) {
-  std::string path = a.scene_path.empty() ? default_scene_path() : a.scene_path;
-  if (!std::filesystem::exists(path)) {
-    const bool has_ext = path.size() > 5 && path.substr(path.size() - 5) == ".toml";
-    const std::string shipped = assets_dir() + "/scenes/" + path + (has_ext ? "" : ".toml");
-    if (std::filesystem::exists(shipped)) path = shipped;
-  }
-  return path;
-}
-
-int jobs_flag(const CommonArgs& a) {
-  auto it = a.flags.find("jobs");
-  if (it == a.flags.end()) return std::max(1u, std::thread::hardware_concurrency());
-  char* end = nullptr;
-  const long j = std::strtol(it->second.c_str(), &end, 10);
-  if (it->second.empty() || *end || j < 1 || j > 1024)
-    throw UsageError("--jobs: expected a whole number 1..1024, got '" + it->second + "'");
-  return int(j);
-}
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
@@ -74,11 +52,11 @@ int cmd_tradeoff(const Args& args) {
                    {"quick", "limit", "quiet"}, {"knob", "reference"});
     if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
     studies::TradeoffOptions opt;
-    opt.scene_path = scene_file(a);
+    opt.scene_path = scene_path_from(a);
     opt.overrides = a.overrides;
     load_scene(opt.scene_path, opt.overrides);  // bad scene / --set: fail now
     opt.out_dir = a.out_dir;
-    opt.jobs = jobs_flag(a);
+    opt.jobs = jobs_from(a);
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
     opt.knobs = studies::default_tradeoff_knobs(has_switch(a, "quick"));
     for (const auto& k : a.multi["knob"]) {
@@ -184,11 +162,11 @@ int cmd_stability(const Args& args) {
     CommonArgs a = parse_args(args, {"jobs", "map"}, {"quick", "quiet"}, {"map"});
     if (a.out_dir.empty()) throw UsageError("stability needs --out DIR");
     studies::StabilityOptions opt;
-    opt.scene_path = scene_file(a);
+    opt.scene_path = scene_path_from(a);
     opt.overrides = a.overrides;
     const Scene scene = load_scene(opt.scene_path, opt.overrides);
     opt.out_dir = a.out_dir;
-    opt.jobs = jobs_flag(a);
+    opt.jobs = jobs_from(a);
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
     opt.maps = studies::default_stability_maps(has_switch(a, "quick"));
     if (a.multi.count("map")) {
