@@ -437,9 +437,7 @@ class SolverT final : public Solver {
       const std::uint8_t fx = model_.fixed[i];
       if (fx == fix_all) continue;
       V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
-      if (fx & fix_x) v.x() = 0;
-      if (fx & fix_y) v.y() = 0;
-      if (fx & fix_z) v.z() = 0;
+      zero_fixed(v, fx);
       v_[i] = v;
       x_[i] += dt * v;
       maxr2 = std::max(maxr2, double(x_[i].squaredNorm()));
@@ -448,10 +446,7 @@ class SolverT final : public Solver {
     for (const auto& [i, F] : f_ext_) {
       if (model_.fixed[i] == fix_all) continue;
       V3 dv = (dt * Real(model_.inv_mass[i])) * F;
-      const std::uint8_t fx = model_.fixed[i];
-      if (fx & fix_x) dv.x() = 0;
-      if (fx & fix_y) dv.y() = 0;
-      if (fx & fix_z) dv.z() = 0;
+      zero_fixed(dv, model_.fixed[i]);
       v_[i] += dv;
       x_[i] += dt * dv;
     }
@@ -461,6 +456,14 @@ class SolverT final : public Solver {
       fail("non_finite", "a yarn node position became NaN/infinite");
     else if (!(maxr2 < escape_radius2_))
       fail("node_escaped", "a yarn node escaped the domain (more than 10 fabric sizes from the centre)");
+  }
+
+  // Zero the components of a node's velocity / displacement change along its fixed axes
+  // (clamps, symmetry planes).
+  static void zero_fixed(V3& v, std::uint8_t fx) {
+    if (fx & fix_x) v.x() = 0;
+    if (fx & fix_y) v.y() = 0;
+    if (fx & fix_z) v.z() = 0;
   }
 
   // ------------------------------------------------------------ yarn contact (Eq 5-17)
@@ -815,10 +818,9 @@ class SolverT final : public Solver {
       sum_n_[i].setZero();
       sum_f_[i].setZero();
       sum_s_[i].setZero();
-      if (fx) {
-        for (int a = 0; a < 3; ++a)
-          if (fx & (1 << a)) dvn[a] = dvf[a] = dx[a] = 0;
-      }
+      zero_fixed(dvn, fx);
+      zero_fixed(dvf, fx);
+      zero_fixed(dx, fx);
       const V3 dv = dvn + dvf;
       v_[i] += dv;
       dv_contact_[i] += dvn;
@@ -838,10 +840,7 @@ class SolverT final : public Solver {
       P -= pn * held_n_[i];
     }
     V3 dv = im * P;
-    const std::uint8_t fx = model_.fixed[i];
-    if (fx & fix_x) dv.x() = 0;
-    if (fx & fix_y) dv.y() = 0;
-    if (fx & fix_z) dv.z() = 0;
+    zero_fixed(dv, model_.fixed[i]);
     v_[i] += dv;
     acc[i] += dv;
     x_[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
@@ -854,10 +853,7 @@ class SolverT final : public Solver {
     V3 dx = im * S;
     const Real dn = dx.dot(held_n_[i]);
     if (hold && dn < Real(0)) dx -= dn * held_n_[i];  // not into the projectile that holds it
-    const std::uint8_t fx = model_.fixed[i];
-    if (fx & fix_x) dx.x() = 0;
-    if (fx & fix_y) dx.y() = 0;
-    if (fx & fix_z) dx.z() = 0;
+    zero_fixed(dx, model_.fixed[i]);
     x_[i] += dx;
     dx_contact_[i] += dx;
   }
@@ -1064,8 +1060,7 @@ class SolverT final : public Solver {
         const Real shift = pen - push * dt;
         if (shift > Real(0)) {
           V3 dx = shift * nrm;
-          if (model_.fixed[i] & fix_x) dx.x() = 0;
-          if (model_.fixed[i] & fix_y) dx.y() = 0;
+          zero_fixed(dx, model_.fixed[i]);
           x_[i] += dx;
           dx_contact_[i] += dx;
         }
@@ -1080,9 +1075,8 @@ class SolverT final : public Solver {
         const Real cap = Real(mu_p) * push;  // mu_p |f_n| dt / m, f_n of Eq 19
         dv_t = -std::min(vtn, cap) * (vt / vtn);
       }
-      const std::uint8_t fx = model_.fixed[i];
-      if (fx & fix_x) dv_t.x() = 0, dv_n.x() = 0;
-      if (fx & fix_y) dv_t.y() = 0, dv_n.y() = 0;
+      zero_fixed(dv_t, model_.fixed[i]);
+      zero_fixed(dv_n, model_.fixed[i]);
       v_[i] += dv_n + dv_t;
       x_[i] += dt * (dv_n + dv_t);
       dv_contact_[i] += dv_n;
