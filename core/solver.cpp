@@ -510,31 +510,63 @@ class SolverT final : public Solver {
     }
   }
 
+  // The nodes around a crossing's tracked pair, loaded once per pass: warp nodes kw-1..kw+1
+  // and weft nodes kf-1..kf+1 (id -1 past a yarn's end), their positions and whether the two
+  // segments of each yarn next to the tracked node are intact. Tracking, the closest points,
+  // the side test and the chord coordinates all work on this window.
+  struct Window {
+    int kw = 0, kf = 0;
+    const int* wn = nullptr;  // node ids of the warp / weft yarn, by position along it
+    const int* fn = nullptr;
+    int nw = 0, nf = 0;  // yarn sizes
+    int wnode[3], fnode[3];
+    V3 xw[3], xf[3];
+    bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
+  };
+  void load_window(const Crossing& cr, int kw, int kf, Window& w) const {
+    w.kw = kw;
+    w.kf = kf;
+    w.wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];
+    w.fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
+    w.nw = model_.yarn_size(cr.warp_yarn);
+    w.nf = model_.yarn_size(cr.weft_yarn);
+    for (int k = 0; k < 3; ++k) {
+      const int iw = kw - 1 + k, jf = kf - 1 + k;
+      w.wnode[k] = (iw >= 0 && iw < w.nw) ? w.wn[iw] : -1;
+      w.fnode[k] = (jf >= 0 && jf < w.nf) ? w.fn[jf] : -1;
+      if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
+      if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
+    }
+    for (int k = 0; k < 2; ++k) {
+      w.wseg[k] = seg_ok(cr.warp_yarn, kw - 1 + k);
+      w.fseg[k] = seg_ok(cr.weft_yarn, kf - 1 + k);
+    }
+  }
+
   // Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
   // edge of the window is searched once more; moving again means the yarns slid more than
   // one node in one step, which the method assumes never happens: reported, not hidden.
-  // Returns true in that case.
-  bool track(int c) {
+  // Returns true in that case; `w` is left loaded around the tracked pair.
+  bool track(int c, Window& w) {
     const Crossing& cr = model_.crossings[c];
-    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
     bool skipped = false;
+    load_window(cr, cr_kw_[c], cr_kf_[c], w);
     for (int round = 0; round < 4; ++round) {
-      int bw = cr_kw_[c], bf = cr_kf_[c];
-      Real best = (x_[ynode(cr.weft_yarn, bf)] - x_[ynode(cr.warp_yarn, bw)]).squaredNorm();
-      for (int dw = -1; dw <= 1; ++dw) {
-        const int kw = cr_kw_[c] + dw;
-        if (kw < 0 || kw >= nw) continue;
-        for (int df = -1; df <= 1; ++df) {
-          const int kf = cr_kf_[c] + df;
-          if (kf < 0 || kf >= nf || (dw == 0 && df == 0)) continue;
-          const Real d2 = (x_[ynode(cr.weft_yarn, kf)] - x_[ynode(cr.warp_yarn, kw)]).squaredNorm();
-          if (d2 < best) best = d2, bw = kw, bf = kf;
+      int bw = 1, bf = 1;
+      Real best = (w.xf[1] - w.xw[1]).squaredNorm();
+      for (int iw = 0; iw < 3; ++iw) {
+        if (w.wnode[iw] < 0) continue;
+        for (int jf = 0; jf < 3; ++jf) {
+          if (w.fnode[jf] < 0 || (iw == 1 && jf == 1)) continue;
+          const Real d2 = (w.xf[jf] - w.xw[iw]).squaredNorm();
+          if (d2 < best) best = d2, bw = iw, bf = jf;
         }
       }
-      if (bw == cr_kw_[c] && bf == cr_kf_[c]) break;
-      cr_kw_[c] = bw;
-      cr_kf_[c] = bf;
+      if (bw == 1 && bf == 1) break;
+      cr_kw_[c] += bw - 1;
+      cr_kf_[c] += bf - 1;
       if (round >= 1) skipped = true;
+      load_window(cr, cr_kw_[c], cr_kf_[c], w);
     }
     return skipped;
   }
@@ -564,28 +596,27 @@ class SolverT final : public Solver {
     Real wf[3] = {0, 0, 0};  // weights on weft nodes kf-1, kf, kf+1
   };
 
-  ContactGeom closest(int c) const {
-    const Crossing& cr = model_.crossings[c];
+  ContactGeom closest(const Crossing& cr, const Window& w) const {
     ContactGeom g;
-    const int kw = cr_kw_[c], kf = cr_kf_[c];
+    const int kw = w.kw, kf = w.kf;
     // The up to 2 segments of each yarn next to the tracked node: start point, direction,
     // squared length (done once, each segment serves two pairs).
     V3 p0[2], d1[2], q0[2], d2[2];
     Real aa[2], ee[2];
     int sws[2], sfs[2], nw = 0, nf = 0;
-    for (int sw = kw - 1; sw <= kw; ++sw) {
-      if (!seg_ok(cr.warp_yarn, sw)) continue;
-      p0[nw] = x_[ynode(cr.warp_yarn, sw)];
-      d1[nw] = x_[ynode(cr.warp_yarn, sw + 1)] - p0[nw];
+    for (int k = 0; k < 2; ++k) {
+      if (!w.wseg[k]) continue;
+      p0[nw] = w.xw[k];
+      d1[nw] = w.xw[k + 1] - p0[nw];
       aa[nw] = d1[nw].squaredNorm();
-      sws[nw++] = sw;
+      sws[nw++] = kw - 1 + k;
     }
-    for (int sf = kf - 1; sf <= kf; ++sf) {
-      if (!seg_ok(cr.weft_yarn, sf)) continue;
-      q0[nf] = x_[ynode(cr.weft_yarn, sf)];
-      d2[nf] = x_[ynode(cr.weft_yarn, sf + 1)] - q0[nf];
+    for (int k = 0; k < 2; ++k) {
+      if (!w.fseg[k]) continue;
+      q0[nf] = w.xf[k];
+      d2[nf] = w.xf[k + 1] - q0[nf];
       ee[nf] = d2[nf].squaredNorm();
-      sfs[nf++] = sf;
+      sfs[nf++] = kf - 1 + k;
     }
     if (nw == 0 || nf == 0) return g;
     struct Cand {
@@ -672,27 +703,28 @@ class SolverT final : public Solver {
 
   // Material coordinate (node index + fraction) of point p along a yarn near node k:
   // projection on the chord joining k's neighbours (unit direction returned in `tangent`).
-  double chord_coord(int yarn, int k, const V3& p, V3& tangent) const {
-    const int km = seg_ok(yarn, k - 1) ? k - 1 : k;
-    const int kp = seg_ok(yarn, k) ? k + 1 : k;
-    V3 xm = x_[ynode(yarn, km)];
+  double chord_coord(int yarn, int k, const V3* xs, const bool* seg, const V3& p, V3& tangent) const {
+    // xs: positions of nodes k-1, k, k+1; seg: segments k-1 and k intact (a Window's).
+    const int km = seg[0] ? k - 1 : k;
+    const int kp = seg[1] ? k + 1 : k;
+    V3 xm = xs[km - k + 1];
     int span = kp - km;
     const int ax = model_.yarn_start_mirror[yarn];
     if (k == 0 && ax >= 0 && kp == 1) {
       // Node 0 sits on a symmetry plane: its other neighbour is node 1's mirror image, and
       // contacts on the mirror side belong to the mirror crossing (offset clamped to >= 0).
-      xm = x_[ynode(yarn, 1)];
+      xm = xs[2];
       xm[ax] = -xm[ax];
       span = 2;
     }
-    const V3 T = x_[ynode(yarn, kp)] - xm;
+    const V3 T = xs[kp - k + 1] - xm;
     const Real T2 = T.squaredNorm();
     if (span == 0 || T2 <= Real(0)) {
       tangent.setZero();
       return k;
     }
     tangent = T / std::sqrt(T2);
-    const double off = double((p - x_[ynode(yarn, k)]).dot(T) / T2) * double(span);
+    const double off = double((p - xs[1]).dot(T) / T2) * double(span);
     const double lo = (k == 0 && ax >= 0) ? 0.0 : double(km - k);
     return k + std::clamp(off, lo, double(kp - k));
   }
@@ -730,12 +762,12 @@ class SolverT final : public Solver {
       // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
       const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
       const bool last = pass == N;
-#pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
-      for (int c = 0; c < nc; ++c) crossing_pass(c, alpha, last);
-      // Apply, in crossing order. Each thread owns a range of nodes and applies, in that
-      // order, the changes that fall in its range: race-free, and the same sums whatever
-      // the number of threads.
       if (threads_ > 1) {
+        // Every crossing's corrections from the same state (Jacobi), then applied: each
+        // thread owns a range of nodes and applies, in crossing order, the changes that
+        // fall in its range: race-free, and the same sums whatever the number of threads.
+#pragma omp parallel for num_threads(threads_) schedule(static)
+        for (int c = 0; c < nc; ++c) crossing_pass(c, alpha, last, impulses_[c]);
 #pragma omp parallel num_threads(threads_)
         {
 #ifdef _OPENMP
@@ -743,10 +775,22 @@ class SolverT final : public Solver {
 #else
           const int t = 0, T = 1;
 #endif
-          apply_pass(int(long(model_.node_count) * t / T), int(long(model_.node_count) * (t + 1) / T));
+          const int lo = int(long(model_.node_count) * t / T), hi = int(long(model_.node_count) * (t + 1) / T);
+          for (int c = 0; c < nc; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
+          finish_pass(lo, hi);
         }
       } else {
-        apply_pass(0, model_.node_count);
+        // One thread: the same sums, gathered as each crossing is done (nothing a crossing
+        // reads changes until finish_pass). Held nodes take their corrections one by one,
+        // which moves them: those wait until every crossing is done, then go in crossing order.
+        held_records_.clear();
+        for (int c = 0; c < nc; ++c) {
+          CrossingImpulse r;
+          crossing_pass(c, alpha, last, r);
+          if (gather(r, 0, model_.node_count, kSums)) held_records_.push_back(r);
+        }
+        for (const CrossingImpulse& r : held_records_) gather(r, 0, model_.node_count, kHeld);
+        finish_pass(0, model_.node_count);
       }
     }
     // Book what broke the method's assumptions, in crossing order.
@@ -775,41 +819,51 @@ class SolverT final : public Solver {
     stuck_count_ = stuck;
   }
 
-  // Apply this pass's corrections to the nodes in [lo, hi): gathered per node in crossing
-  // order, then applied once per node. Nodes the projectile holds take each correction
-  // separately (the hold projects out the part pushing into the projectile).
-  void apply_pass(int lo, int hi) {
-    const int nc = int(model_.crossings.size());
-    for (int c = 0; c < nc; ++c) {
-      const CrossingImpulse& r = impulses_[c];
-      if (r.has_n)
-        for (int k = 0; k < 6; ++k) {
-          const int i = r.node[k];
-          if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
-          if (held_flag_[i])
-            apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
-          else
-            sum_n_[i] += r.w[k] * r.P;
+  // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums
+  // (kSums), applied once per node by finish_pass; nodes the projectile holds take each
+  // correction separately (kHeld), as the hold projects out the part pushing into the
+  // projectile. Returns whether the record touches a held node.
+  static constexpr int kSums = 1, kHeld = 2;
+  bool gather(const CrossingImpulse& r, int lo, int hi, int what) {
+    bool held = false;
+    if (r.has_n)
+      for (int k = 0; k < 6; ++k) {
+        const int i = r.node[k];
+        if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
+        if (held_flag_[i]) {
+          held = true;
+          if (what & kHeld) apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
+        } else if (what & kSums) {
+          sum_n_[i] += r.w[k] * r.P;
         }
-      if (r.has_f)
-        for (int k = 0; k < 4; ++k) {
-          const int i = r.fnode[k];
-          if (i < lo || i >= hi || r.fw[k] == Real(0)) continue;
-          if (held_flag_[i])
-            apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
-          else
-            sum_f_[i] += r.fw[k] * r.F;
+      }
+    if (r.has_f)
+      for (int k = 0; k < 4; ++k) {
+        const int i = r.fnode[k];
+        if (i < lo || i >= hi || r.fw[k] == Real(0)) continue;
+        if (held_flag_[i]) {
+          held = true;
+          if (what & kHeld) apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
+        } else if (what & kSums) {
+          sum_f_[i] += r.fw[k] * r.F;
         }
-      if (r.has_s)
-        for (int k = 0; k < 6; ++k) {
-          const int i = r.node[k];
-          if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
-          if (held_flag_[i])
-            shift_node(i, r.w[k] * r.S, r.hold);
-          else
-            sum_s_[i] += r.w[k] * r.S;
+      }
+    if (r.has_s)
+      for (int k = 0; k < 6; ++k) {
+        const int i = r.node[k];
+        if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
+        if (held_flag_[i]) {
+          held = true;
+          if (what & kHeld) shift_node(i, r.w[k] * r.S, r.hold);
+        } else if (what & kSums) {
+          sum_s_[i] += r.w[k] * r.S;
         }
-    }
+      }
+    return held;
+  }
+
+  // Apply the pass's gathered sums to the nodes in [lo, hi).
+  void finish_pass(int lo, int hi) {
     const Real dt = Real(model_.dt);
     for (int i = lo; i < hi; ++i) {
       const Real im = Real(model_.inv_mass[i]);
@@ -859,14 +913,14 @@ class SolverT final : public Solver {
   }
 
   // Tracking, normal correction and friction of one crossing in one pass.
-  void crossing_pass(int c, Real alpha, bool last) {
-    CrossingImpulse& r = impulses_[c];
+  void crossing_pass(int c, Real alpha, bool last, CrossingImpulse& r) {
     r.has_n = r.has_f = r.has_s = r.hold = false;
     if (!cr_active_[c]) return;
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
-    if (track(c)) cr_event_[c] |= ev_skip;
-    const ContactGeom g = closest(c);
+    Window w;
+    if (track(c, w)) cr_event_[c] |= ev_skip;
+    const ContactGeom g = closest(cr, w);
     if (!g.ok) {
       release(c, ev_lost);  // both adjoining segments of a yarn are broken
       return;
@@ -876,17 +930,16 @@ class SolverT final : public Solver {
       release(c, ev_ravel);
       return;
     }
-    const int kw = cr_kw_[c], kf = cr_kf_[c];
+    const int kw = w.kw, kf = w.kf;
     for (int k = 0; k < 3; ++k) {
-      const int iw = kw - 1 + k, jf = kf - 1 + k;
-      r.node[k] = (iw >= 0 && iw < model_.yarn_size(cr.warp_yarn)) ? ynode(cr.warp_yarn, iw) : -1;
-      r.node[3 + k] = (jf >= 0 && jf < model_.yarn_size(cr.weft_yarn)) ? ynode(cr.weft_yarn, jf) : -1;
+      r.node[k] = w.wnode[k];
+      r.node[3 + k] = w.fnode[k];
       r.w[k] = -g.ww[k];
       r.w[3 + k] = g.wf[k];
     }
     // Side test: n from the weave's fixed sign and the current segment directions.
-    const V3 tw = x_[ynode(cr.warp_yarn, g.sw + 1)] - x_[ynode(cr.warp_yarn, g.sw)];
-    const V3 tf = x_[ynode(cr.weft_yarn, g.sf + 1)] - x_[ynode(cr.weft_yarn, g.sf)];
+    const V3 tw = w.xw[g.sw - kw + 2] - w.xw[g.sw - kw + 1];
+    const V3 tf = w.xf[g.sf - kf + 2] - w.xf[g.sf - kf + 1];
     V3 n = tw.cross(tf);
     const Real nn = n.norm();
     if (nn > Real(1e-20))
@@ -974,12 +1027,12 @@ class SolverT final : public Solver {
     // point, which jumps between the equivalent segment pairs of the zig-zag.
     V3 pa = V3::Zero(), pb = V3::Zero();
     for (int k = 0; k < 3; ++k) {
-      if (r.node[k] >= 0) pa -= r.w[k] * x_[r.node[k]];
-      if (r.node[3 + k] >= 0) pb += r.w[3 + k] * x_[r.node[3 + k]];
+      if (r.node[k] >= 0) pa -= r.w[k] * w.xw[k];
+      if (r.node[3 + k] >= 0) pb += r.w[3 + k] * w.xf[k];
     }
     V3 Tw, Tf;
-    const double cw = chord_coord(cr.warp_yarn, kw, pb, Tw);
-    const double cf = chord_coord(cr.weft_yarn, kf, pa, Tf);
+    const double cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, Tw);
+    const double cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, Tf);
     if (cr_stick_w_[c] < 0) cr_stick_w_[c] = cw, cr_stick_f_[c] = cf;
     Real fa, fb;
     coord_nodes(cr.warp_yarn, cw, r.fnode[0], r.fnode[1], fa);
@@ -1145,10 +1198,12 @@ class SolverT final : public Solver {
     for (int c = 0; c < nc; ++c) {
       if (!cr_active_[c]) continue;
       const Crossing& cr = model_.crossings[c];
-      const ContactGeom g = closest(c);
+      Window w;
+      load_window(cr, cr_kw_[c], cr_kf_[c], w);
+      const ContactGeom g = closest(cr, w);
       if (!g.ok) continue;
-      const V3 tw = x_[ynode(cr.warp_yarn, g.sw + 1)] - x_[ynode(cr.warp_yarn, g.sw)];
-      const V3 tf = x_[ynode(cr.weft_yarn, g.sf + 1)] - x_[ynode(cr.weft_yarn, g.sf)];
+      const V3 tw = w.xw[g.sw - w.kw + 2] - w.xw[g.sw - w.kw + 1];
+      const V3 tf = w.xf[g.sf - w.kf + 2] - w.xf[g.sf - w.kf + 1];
       const V3 n = Real(cr.side) * tw.cross(tf);
       const double D = cr.contact_distance, dist = double(g.dist);
       const double pen = g.d.dot(n) >= Real(0) ? D - dist : (dist > D ? 0.0 : D + dist);
@@ -1225,6 +1280,7 @@ class SolverT final : public Solver {
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
   std::vector<CrossingImpulse> impulses_;
+  std::vector<CrossingImpulse> held_records_;  // one thread: records touching held nodes (yarn_contact)
   enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8, ev_separated = 16 };
   V3 xp_, vp_;
   double ke_half_ = 0, ke_fabric_half_ = 0;
