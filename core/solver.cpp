@@ -826,39 +826,24 @@ class SolverT final : public Solver {
   static constexpr int kSums = 1, kHeld = 2;
   bool gather(const CrossingImpulse& r, int lo, int hi, int what) {
     bool held = false;
+    // One kind of correction: weights w on nodes, times the vector q.
+    auto each = [&](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum, auto&& take_held) {
+      for (int k = 0; k < count; ++k) {
+        const int i = nodes[k];
+        if (i < lo || i >= hi || w[k] == Real(0)) continue;
+        if (held_flag_[i]) {
+          held = true;
+          if (what & kHeld) take_held(i, w[k] * q);
+        } else if (what & kSums) {
+          sum[i] += w[k] * q;
+        }
+      }
+    };
     if (r.has_n)
-      for (int k = 0; k < 6; ++k) {
-        const int i = r.node[k];
-        if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
-        if (held_flag_[i]) {
-          held = true;
-          if (what & kHeld) apply_impulse(i, r.w[k] * r.P, dv_contact_, r.hold);
-        } else if (what & kSums) {
-          sum_n_[i] += r.w[k] * r.P;
-        }
-      }
+      each(6, r.node, r.w, r.P, sum_n_, [&](int i, const V3& p) { apply_impulse(i, p, dv_contact_, r.hold); });
     if (r.has_f)
-      for (int k = 0; k < 4; ++k) {
-        const int i = r.fnode[k];
-        if (i < lo || i >= hi || r.fw[k] == Real(0)) continue;
-        if (held_flag_[i]) {
-          held = true;
-          if (what & kHeld) apply_impulse(i, r.fw[k] * r.F, dv_friction_, r.hold);
-        } else if (what & kSums) {
-          sum_f_[i] += r.fw[k] * r.F;
-        }
-      }
-    if (r.has_s)
-      for (int k = 0; k < 6; ++k) {
-        const int i = r.node[k];
-        if (i < lo || i >= hi || r.w[k] == Real(0)) continue;
-        if (held_flag_[i]) {
-          held = true;
-          if (what & kHeld) shift_node(i, r.w[k] * r.S, r.hold);
-        } else if (what & kSums) {
-          sum_s_[i] += r.w[k] * r.S;
-        }
-      }
+      each(4, r.fnode, r.fw, r.F, sum_f_, [&](int i, const V3& p) { apply_impulse(i, p, dv_friction_, r.hold); });
+    if (r.has_s) each(6, r.node, r.w, r.S, sum_s_, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
     return held;
   }
 
