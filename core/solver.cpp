@@ -619,6 +619,11 @@ class SolverT final : public Solver {
       sfs[nf++] = kf - 1 + k;
     }
     if (nw == 0 || nf == 0) return g;
+    // The first closest pair is chosen below; this default only stands when no distance
+    // compares (a NaN state, which the ledger check then stops), and keeps g.sw / g.sf
+    // inside the window.
+    g.sw = sws[0];
+    g.sf = sfs[0];
     struct Cand {
       int iw, jf;
       Real a, b, dist2;
