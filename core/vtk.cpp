@@ -1,37 +1,24 @@
 #include "vtk.h"
 
-#include <unistd.h>
+#include "results.h"
 
-#include <cerrno>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 
 namespace ravel {
 
 namespace {
 
-// Temporary name in the same folder, then rename: readers never see half a file.
+// Through the one atomic writer of every ravel output (results.h), as a bool + message.
 bool write_atomic(const std::string& path, const std::string& bytes, std::string* error) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      if (error) *error = "cannot write " + tmp;
-      std::remove(tmp.c_str());
-      return false;
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (error) *error = "cannot rename " + tmp + " to " + path + ": " + std::strerror(errno);
-    std::remove(tmp.c_str());
+  try {
+    write_file_atomic(path, bytes);
+    return true;
+  } catch (const OutputError& e) {
+    if (error) *error = e.what();
     return false;
   }
-  return true;
 }
 
 // The appended-data block: each array is a UInt64 byte count followed by its bytes.

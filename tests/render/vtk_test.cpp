@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "render/renderer.h"
 #include "tests/render/synthetic_frame.h"
 
 namespace ravel::testing {
@@ -55,9 +56,55 @@ TEST(Vtk, SeriesWritesVtuPerFrameAndAPvdIndex) {
   const std::size_t end = vtu.rfind("\n  </AppendedData>");
   ASSERT_NE(end, std::string::npos);
   EXPECT_EQ(end - start, payload);
-  // No temporary files left behind.
+  // No temporary files left behind (write_file_atomic's are ".NAME.tmpPID_N").
   for (const auto& entry : std::filesystem::directory_iterator(dir))
-    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+// The VTU and PNG writers go through core's write_file_atomic: a folder that does not
+// exist gives false and a message naming the file, and nothing is left behind.
+TEST(Vtk, WritersReportTheFileTheyCouldNotWrite) {
+  const std::string dir = std::string(RAVEL_RENDER_OUTPUT_DIR) + "/vtk_missing_test";
+  std::filesystem::remove_all(dir);
+  const std::string vtu = dir + "/no/such/folder/frame.vtu";
+  std::string error;
+  SyntheticFabric s;
+  s.yarns = 4;
+  EXPECT_FALSE(write_vtu(make_synthetic_frame(s), vtu, true, &error));
+  EXPECT_NE(error.find(vtu), std::string::npos) << error;
+  const std::string pvd = dir + "/no/such/folder/series.pvd";
+  error.clear();
+  EXPECT_FALSE(write_pvd(pvd, {}, &error));
+  EXPECT_NE(error.find(pvd), std::string::npos) << error;
+  const std::string png = dir + "/no/such/folder/image.png";
+  error.clear();
+  EXPECT_FALSE(render::write_png(png, 2, 1, std::vector<std::uint8_t>(6, 128), &error));
+  EXPECT_NE(error.find(png), std::string::npos) << error;
+  EXPECT_FALSE(std::filesystem::exists(dir));
+}
+
+// A PNG written through the atomic writer is a whole PNG and leaves no temporary file.
+TEST(Vtk, PngIsWrittenWholeWithNoTemporaryLeft) {
+  const std::string dir = std::string(RAVEL_RENDER_OUTPUT_DIR) + "/png_atomic_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::vector<std::uint8_t> rgb(16 * 8 * 3);
+  for (std::size_t i = 0; i < rgb.size(); ++i) rgb[i] = std::uint8_t(i * 7);
+  std::string error;
+  ASSERT_TRUE(render::write_png(dir + "/a.png", 16, 8, rgb, &error)) << error;
+  const std::string bytes = slurp(dir + "/a.png");
+  ASSERT_GT(bytes.size(), 8u + 25u);
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  // IHDR: width 16, height 8, big-endian, right after the signature and chunk header.
+  EXPECT_EQ(std::uint8_t(bytes[19]), 16);
+  EXPECT_EQ(std::uint8_t(bytes[23]), 8);
+  EXPECT_EQ(bytes.substr(bytes.size() - 8, 4), "IEND");
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename().string(), "a.png");
+  }
+  EXPECT_EQ(files, 1);
 }
 
 }  // namespace
