@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "results.h"
+#include "sweep.h"
 
 namespace ravel::app {
 
@@ -102,6 +103,10 @@ bool has_switch(const CommonArgs& a, const std::string& name) {
 int report_error(const std::exception& e) {
   if (dynamic_cast<const SceneError*>(&e)) {
     std::fprintf(stderr, "ravel: scene error: %s\n", e.what());
+    return exit_usage;
+  }
+  if (dynamic_cast<const studies::StudyError*>(&e)) {  // a bad study flag: names flag and value
+    std::fprintf(stderr, "ravel: %s\n", e.what());
     return exit_usage;
   }
   if (dynamic_cast<const UsageError*>(&e)) {

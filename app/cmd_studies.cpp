@@ -127,9 +127,6 @@ int cmd_sweep(const Args& args) {
     }
     if (rep.interrupted) return exit_interrupted;
     return rep.cases_failed ? exit_failure : exit_ok;
-  } catch (const studies::StudyError& e) {
-    std::fprintf(stderr, "ravel: %s\n", e.what());
-    return exit_usage;
   } catch (const std::exception& e) {
     return report_error(e);
   }

@@ -149,9 +149,6 @@ int cmd_tradeoff(const Args& args) {
     for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     std::printf("  %s/tradeoff.{csv,json,md}, %s/tradeoff_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());
     return r.rows.empty() || r.rows[0].status == "failed" || r.rows[0].status == "missing" ? exit_failure : exit_ok;
-  } catch (const studies::StudyError& e) {
-    std::fprintf(stderr, "ravel: %s\n", e.what());
-    return exit_usage;
   } catch (const std::exception& e) {
     return report_error(e);
   }
@@ -205,9 +202,6 @@ int cmd_stability(const Args& args) {
     for (const auto& e : r.errors) std::fprintf(stderr, "ravel: %s\n", e.c_str());
     std::printf("  %s/stability.{csv,md}, %s/stability_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());
     return r.errors.empty() ? exit_ok : exit_failure;
-  } catch (const studies::StudyError& e) {
-    std::fprintf(stderr, "ravel: %s\n", e.what());
-    return exit_usage;
   } catch (const std::exception& e) {
     return report_error(e);
   }
