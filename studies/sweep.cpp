@@ -366,12 +366,12 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
   return out;
 }
 
-SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
+SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& to_run, const SweepOptions& opt,
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
                       const std::atomic<bool>* interrupt) {
   // Cases are named by their varied settings only: a folder that holds cases of another
   // base scene or --set would be silently mixed in. Refuse it.
-  for (const auto& c : todo) {
+  for (const auto& c : to_run) {
     if (!case_finished(opt.out_dir, c)) continue;
     std::string text;
     try {
@@ -399,9 +399,9 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
 
   SweepReport rep;
   rep.cases_total = int(all_cases.size());
-  rep.cases_in_shard = int(todo.size());
+  rep.cases_in_shard = int(to_run.size());
   SweepProgress prog;
-  prog.total = int(todo.size());
+  prog.total = int(to_run.size());
   std::mutex mu;
   std::atomic<size_t> next{0};
   std::atomic<long> tmp_counter{0};
@@ -425,8 +425,8 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
     for (;;) {
       if (interrupt && interrupt->load()) return;
       const size_t i = next.fetch_add(1);
-      if (i >= todo.size()) return;
-      const Case& c = todo[i];
+      if (i >= to_run.size()) return;
+      const Case& c = to_run[i];
       CaseResult r;
       r.c = c;
       const std::string final_dir = case_dir(opt.out_dir, c);
@@ -488,7 +488,7 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
     }
   };
 
-  const int jobs = std::max(1, std::min<int>(opt.jobs, std::max<int>(1, int(todo.size()))));
+  const int jobs = std::max(1, std::min<int>(opt.jobs, std::max<int>(1, int(to_run.size()))));
   std::vector<std::thread> pool;
   for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
   for (auto& t : pool) t.join();

@@ -105,9 +105,9 @@ struct SweepHooks {
   std::function<void(const Case&, const Simulation&, const std::string& case_tmp_dir)> on_simulation;
 };
 
-// Run the cases (already sharded) in parallel; resumes; writes DIR/results.csv with
+// Run `to_run` (this shard's cases) in parallel; resumes; writes DIR/results.csv with
 // every finished case of `all_cases` (not only this shard's), and DIR/sweep.json.
-SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& todo, const SweepOptions& opt,
+SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& to_run, const SweepOptions& opt,
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks = {},
                       const std::atomic<bool>* interrupt = nullptr);
 

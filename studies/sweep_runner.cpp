@@ -45,18 +45,18 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
     return false;
   }
   const auto all = expand_cases(vary);
-  const auto todo = shard_cases(all, options.shard);
+  const auto to_run = shard_cases(all, options.shard);
   {
     std::lock_guard<std::mutex> lock(mu_);
     state_ = Snapshot{};
     state_.running = true;
     state_.varied_keys = keys;
-    state_.progress.total = int(todo.size());
+    state_.progress.total = int(to_run.size());
     state_.results.header = {"case"};
     for (const auto& k : keys) state_.results.header.push_back(k);
   }
   interrupt_.store(false);
-  thread_ = std::thread([this, options, all, todo, keys] {
+  thread_ = std::thread([this, options, all, to_run, keys] {
     SweepHooks hooks;
     // Called under the sweep's own lock, one at a time; ours is held only to copy.
     hooks.on_progress = [this](const SweepProgress& p) {
@@ -91,7 +91,7 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
     SweepReport rep;
     std::string err;
     try {
-      rep = run_sweep(all, todo, options, keys, hooks, &interrupt_);
+      rep = run_sweep(all, to_run, options, keys, hooks, &interrupt_);
     } catch (const std::exception& e) {
       err = e.what();
     }

@@ -345,7 +345,6 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
   // Ballistic limits (one search per distinct case; resumed from DIR/limit/<case>.json).
   if (opt.limit && !res.interrupted) {
     prepare_output_dir(opt.out_dir + "/limit");
-    std::vector<Case> todo = cases;
     std::atomic<size_t> next{0};
     std::mutex mu;
     std::map<std::string, double> bl;
@@ -353,15 +352,16 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
       for (;;) {
         if (interrupt && interrupt->load()) return;
         const size_t i = next.fetch_add(1);
-        if (i >= todo.size()) return;
-        const std::string path = opt.out_dir + "/limit/" + todo[i].name() + ".json";
+        if (i >= cases.size()) return;
+        const std::string name = cases[i].name();
+        const std::string path = opt.out_dir + "/limit/" + name + ".json";
         double v = NAN;
         if (fs::exists(path)) {
           const auto j = ojson::parse(read_text_file(path), nullptr, false);
           if (!j.is_discarded() && j.value("converged", false)) v = j["ballistic_limit_mps"].get<double>();
         } else {
           auto ov = opt.overrides;
-          for (const auto& o : todo[i].overrides()) ov.push_back(o);
+          for (const auto& o : cases[i].overrides()) ov.push_back(o);
           ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
           ov.push_back("output.progress=false");
           try {
@@ -371,20 +371,19 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
             if (r.converged) v = r.ballistic_limit_mps;
           } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mu);
-            res.warnings.push_back("ballistic limit of " + todo[i].name() + ": " + e.what());
+            res.warnings.push_back("ballistic limit of " + name + ": " + e.what());
           }
           if (opt.on_progress) {
             std::lock_guard<std::mutex> lock(mu);
-            opt.on_progress("ballistic limit " + todo[i].name() + ": " +
-                            (std::isnan(v) ? "not found" : num(v) + " m/s"));
+            opt.on_progress("ballistic limit " + name + ": " + (std::isnan(v) ? "not found" : num(v) + " m/s"));
           }
         }
         std::lock_guard<std::mutex> lock(mu);
-        bl[todo[i].name()] = v;
+        bl[name] = v;
       }
     };
     std::vector<std::thread> pool;
-    for (int j = 0; j < std::max(1, std::min<int>(opt.jobs, int(todo.size()))); ++j) pool.emplace_back(worker);
+    for (int j = 0; j < std::max(1, std::min<int>(opt.jobs, int(cases.size()))); ++j) pool.emplace_back(worker);
     for (auto& t : pool) t.join();
     for (auto& row : res.rows)
       if (bl.count(row.case_name)) row.value_q[q_ballistic_limit] = bl[row.case_name];
