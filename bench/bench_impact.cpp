@@ -10,6 +10,7 @@
 #include "../app/omp_env.h"
 #include "scene.h"
 #include "simulation.h"
+#include "solver.h"
 
 int main(int argc, char** argv) {
   ravel::app::choose_omp_wait_policy(argv);  // as the ravel executable does
@@ -24,7 +25,7 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,"
-      "residual_velocity_mps,omp_spincount\n");
+      "residual_velocity_mps,omp_spincount,simd\n");
   for (int r = 0; r < repeat; ++r) {
     ravel::Scene scene = ravel::load_scene(ravel::default_scene_path(), ov);
     ravel::Simulation sim(scene);
@@ -34,10 +35,10 @@ int main(int argc, char** argv) {
     const auto s = sim.summary();
     const double ns = double(s.node_count) * double(s.step_count);
     const char* spin = std::getenv("GOMP_SPINCOUNT");
-    std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f,%s\n", s.model.c_str(), s.contact_model.c_str(),
+    std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f,%s,%s\n", s.model.c_str(), s.contact_model.c_str(),
                 scene.solver.precision == ravel::Precision::double_precision ? "double" : "float", scene.solver.threads,
                 s.node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
-                s.residual_velocity_mps, spin ? spin : "default");
+                s.residual_velocity_mps, spin ? spin : "default", sim.solver().simd_active() ? "avx2" : "off");
   }
   return 0;
 }

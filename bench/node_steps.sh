@@ -30,7 +30,7 @@ trap 'rm -f "$tmp" "$tmp.t"' EXIT
   echo "# date $(date -u +%Y-%m-%dT%H:%MZ), host $(hostname), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "# OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-chosen by bench_impact} GOMP_SPINCOUNT=${GOMP_SPINCOUNT:-chosen by bench_impact}"
   echo "# wall_s: elapsed; user_s/sys_s: CPU time of the process (all threads); load1: 1-minute load average just before the run"
-  echo "model,precision,threads,repeat,nodes,steps,wall_s,user_s,sys_s,node_steps_per_s,node_steps_per_cpu_s,perforated,residual_velocity_mps,load1,omp_spincount"
+  echo "model,precision,threads,repeat,nodes,steps,wall_s,user_s,sys_s,node_steps_per_s,node_steps_per_cpu_s,perforated,residual_velocity_mps,load1,omp_spincount,simd"
 } > "$tmp"
 for r in $(seq 1 "$repeats"); do
   for model in sliding pin_jointed; do
@@ -40,12 +40,12 @@ for r in $(seq 1 "$repeats"); do
         TIMEFORMAT='%R %U %S'
         { time "$bench" --set solver.model=$model --set solver.precision=$prec --set solver.threads=$th > "$tmp.t"; } 2> "$tmp.time"
         read -r real user sys < "$tmp.time"
-        # bench_impact: model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,residual_velocity_mps
+        # bench_impact: model,contact,precision,threads,nodes,steps,sim_time_us,wall_s,node_steps_per_s,ns_per_node_step,perforated,residual_velocity_mps,omp_spincount,simd
         line="$(tail -n1 "$tmp.t")"
-        IFS=, read -r _m contact _p _t nodes steps _sim wall nsps _ns perf vr spin <<< "$line"
+        IFS=, read -r _m contact _p _t nodes steps _sim wall nsps _ns perf vr spin simd <<< "$line"
         cpu="$(awk -v u="$user" -v s="$sys" 'BEGIN{print u+s}')"
         per_cpu="$(awk -v n="$nodes" -v k="$steps" -v c="$cpu" 'BEGIN{printf "%.4g", n*k/c}')"
-        echo "$contact,$prec,$th,$r,$nodes,$steps,$wall,$user,$sys,$nsps,$per_cpu,$perf,$vr,$load,$spin" >> "$tmp"
+        echo "$contact,$prec,$th,$r,$nodes,$steps,$wall,$user,$sys,$nsps,$per_cpu,$perf,$vr,$load,$spin,$simd" >> "$tmp"
         echo "  $contact $prec threads=$th repeat $r: wall $wall s, cpu $cpu s, $nsps node-steps/s (load $load, spin $spin)" >&2
       done
     done

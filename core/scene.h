@@ -77,6 +77,7 @@ struct SolverParams {
   Precision precision = Precision::double_precision;
   double end_time_s = 150e-6;
   int threads = 1;                  // 0 = all cores
+  bool simd = true;                 // closest points in AVX2 lanes where available (bit-identical)
   double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
   double max_search_lost =
       0.01;  // nearest-pair search lost at more than this fraction of crossings in one step -> diverged

@@ -257,6 +257,7 @@ Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   impl_->scene = scene;
   Model m = build_model(scene);
   impl_->solver = make_solver(m, scene.solver.precision, scene.solver.threads);
+  impl_->solver->set_simd(scene.solver.simd);
   impl_->solver->set_max_balance_error(scene.solver.max_balance_error);
   impl_->sample_every = std::max<long>(1, std::lround(scene.output.history_interval_s / m.dt));
   impl_->warnings = scene.warnings;

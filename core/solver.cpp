@@ -6,7 +6,9 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <type_traits>
 
+#include "contact_lanes.h"
 #include "geometry.h"
 #include "material.h"
 
@@ -109,6 +111,12 @@ class SolverT final : public Solver {
     threads_ = 1;
     (void)n;
 #endif
+  }
+  void set_simd(bool on) override {
+    simd_ = on;
+  }
+  bool simd_active() const override {
+    return lanes_on();
   }
 
   void step() override {
@@ -771,8 +779,10 @@ class SolverT final : public Solver {
         // Every crossing's corrections from the same state (Jacobi), then applied: each
         // thread owns a range of nodes and applies, in crossing order, the changes that
         // fall in its range: race-free, and the same sums whatever the number of threads.
+        const int nb = (nc + kBatch - 1) / kBatch;
 #pragma omp parallel for num_threads(threads_) schedule(static)
-        for (int c = 0; c < nc; ++c) crossing_pass(c, alpha, last, impulses_[c]);
+        for (int b = 0; b < nb; ++b)
+          crossing_batch(b * kBatch, std::min(nc, (b + 1) * kBatch), alpha, last, &impulses_[b * kBatch]);
 #pragma omp parallel num_threads(threads_)
         {
 #ifdef _OPENMP
@@ -789,10 +799,12 @@ class SolverT final : public Solver {
         // reads changes until finish_pass). Held nodes take their corrections one by one,
         // which moves them: those wait until every crossing is done, then go in crossing order.
         held_records_.clear();
-        for (int c = 0; c < nc; ++c) {
-          CrossingImpulse r;
-          crossing_pass(c, alpha, last, r);
-          if (gather(r, 0, model_.node_count, kSums)) held_records_.push_back(r);
+        CrossingImpulse rs[kBatch];
+        for (int c0 = 0; c0 < nc; c0 += kBatch) {
+          const int c1 = std::min(nc, c0 + kBatch);
+          crossing_batch(c0, c1, alpha, last, rs);
+          for (int c = c0; c < c1; ++c)
+            if (gather(rs[c - c0], 0, model_.node_count, kSums)) held_records_.push_back(rs[c - c0]);
         }
         for (const CrossingImpulse& r : held_records_) gather(r, 0, model_.node_count, kHeld);
         finish_pass(0, model_.node_count);
@@ -902,15 +914,66 @@ class SolverT final : public Solver {
     dx_contact_[i] += dx;
   }
 
-  // Tracking, normal correction and friction of one crossing in one pass.
-  void crossing_pass(int c, Real alpha, bool last, CrossingImpulse& r) {
-    r.has_n = r.has_f = r.has_s = r.hold = false;
-    if (!cr_active_[c]) return;
+  // Crossings [c0, c1) (at most kBatch) in one pass: tracking of each, then the closest
+  // points of those whose four segments are intact together in lanes (when on and the
+  // processor has them; the same numbers bit for bit), then the rest of each.
+  static constexpr int kBatch = lanes::kWidth;
+  bool lanes_on() const {
+    return std::is_same_v<Real, double> && simd_ && lanes::available();
+  }
+  void crossing_batch(int c0, int c1, Real alpha, bool last, CrossingImpulse* out) {
+    Window w[kBatch];
+    ContactGeom g[kBatch];
+    int lane[kBatch];
+    const bool use_lanes = lanes_on();
+    lanes::ClosestBatch lb;
+    int nl = 0;
+    for (int c = c0; c < c1; ++c) {
+      const int k = c - c0;
+      CrossingImpulse& r = out[k];
+      r.has_n = r.has_f = r.has_s = r.hold = false;
+      lane[k] = -1;
+      if (!cr_active_[c]) continue;
+      if (track(c, w[k])) cr_event_[c] |= ev_skip;
+      const Crossing& cr = model_.crossings[c];
+      if constexpr (std::is_same_v<Real, double>) {
+        if (use_lanes && w[k].wseg[0] && w[k].wseg[1] && w[k].fseg[0] && w[k].fseg[1]) {
+          lb.xw[nl] = w[k].xw[0].data();  // V3 xw[3]: 9 consecutive doubles
+          lb.xf[nl] = w[k].xf[0].data();
+          lb.band[nl] = double(Real(kTieBand) * Real(cr.contact_distance));
+          lane[k] = nl++;
+          continue;
+        }
+      }
+      g[k] = closest(cr, w[k]);
+    }
+    if (nl > 0) {
+      // Unused lanes repeat lane 0 (their results are not read).
+      for (int l = nl; l < lanes::kWidth; ++l) lb.xw[l] = lb.xw[0], lb.xf[l] = lb.xf[0], lb.band[l] = lb.band[0];
+      lanes::closest4(lb);
+      for (int k = 0; k < c1 - c0; ++k) {
+        const int l = lane[k];
+        if (l < 0) continue;
+        ContactGeom& q = g[k];
+        q.ok = true;
+        q.sw = w[k].kw - 1 + int(lb.iw[l]);
+        q.sf = w[k].kf - 1 + int(lb.jf[l]);
+        q.a = Real(lb.a[l]);
+        q.b = Real(lb.b[l]);
+        q.d = V3(Real(lb.d[0][l]), Real(lb.d[1][l]), Real(lb.d[2][l]));
+        q.dist = Real(lb.dist[l]);
+        for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
+      }
+    }
+    for (int c = c0; c < c1; ++c)
+      if (cr_active_[c]) crossing_pass(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
+  }
+
+  // Normal correction and friction of one tracked crossing in one pass, given its window
+  // and closest points.
+  void crossing_pass(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, CrossingImpulse& r) {
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
-    Window w;
-    if (track(c, w)) cr_event_[c] |= ev_skip;
-    const ContactGeom g = closest(cr, w);
     if (!g.ok) {
       release(c, ev_lost);  // both adjoining segments of a yarn are broken
       return;
@@ -1250,6 +1313,7 @@ class SolverT final : public Solver {
 
  private:
   int threads_ = 1;
+  bool simd_ = true;  // closest points in lanes where the processor has them (contact_lanes.h)
   ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
   std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism

@@ -55,6 +55,11 @@ class Solver {
 
   virtual void step() = 0;
   virtual void set_threads(int n) = 0;
+  // Closest points of four crossings at once in AVX2 lanes where the processor has them
+  // (on by default; bit-identical to one at a time, see contact_lanes.h). simd_active():
+  // whether the lanes are used (on, double precision, an AVX2 processor).
+  virtual void set_simd(bool on) = 0;
+  virtual bool simd_active() const = 0;
 
   double time() const { return time_; }
   long steps() const { return steps_; }

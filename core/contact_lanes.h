@@ -1,0 +1,37 @@
+// The closest points of the yarn contact (Eq 5-8 with the tie band, docs/MODEL.md §4) for
+// four crossings at once, in the AVX2 lanes of processors that have them.
+//
+// The lane code performs, lane by lane, exactly the IEEE operations of the one-crossing code
+// in solver.cpp (SolverT::closest), in the same order, and this file is compiled without
+// floating-point contraction: the results are the same bit for bit (tested), only computed
+// four at a time. It covers the regular case, all four segments next to the tracked pair
+// intact; the solver computes the other crossings one at a time.
+#pragma once
+
+namespace ravel::lanes {
+
+constexpr int kWidth = 4;
+
+// Four crossing windows. The inputs point into each crossing's own window (read in place:
+// copying them into lane order first would stall every vector load on the copies), the
+// outputs are in lane order (structure of arrays, [..][lane]).
+struct ClosestBatch {
+  // In, per lane: positions of warp nodes kw-1..kw+1 and weft nodes kf-1..kf+1 (9
+  // consecutive doubles each: x y z of each node), and the tie band (kTieBand * D).
+  const double* xw[kWidth];
+  const double* xf[kWidth];
+  double band[kWidth];
+  // Out, as SolverT::ContactGeom: mean contact vector warp -> weft, smallest |d|, weights
+  // on the three warp / weft nodes, and the first closest pair's segments (0: kw-1 / kf-1,
+  // 1: kw / kf) and fractions.
+  double d[3][kWidth], dist[kWidth], ww[3][kWidth], wf[3][kWidth], a[kWidth], b[kWidth];
+  long long iw[kWidth], jf[kWidth];
+};
+
+// Whether this processor runs the lane code (AVX2); checked once.
+bool available();
+
+// Fills the outputs of all four lanes. Only call when available().
+void closest4(ClosestBatch& s);
+
+}  // namespace ravel::lanes

@@ -1,0 +1,140 @@
+// The yarn contact's closest points in AVX2 lanes (core/contact_lanes.h): the geometry of
+// known crossings, lanes independent of each other, and whole runs bit-identical to the
+// one-crossing-at-a-time code. Skipped (with a message) on processors without AVX2.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "contact_lanes.h"
+#include "fixture.h"
+#include "solver.h"
+
+namespace ravel {
+namespace {
+
+using test::operator+;
+
+constexpr double L = 0.844e-3;  // node spacing
+constexpr double h = 0.2e-3;    // gap between the yarn axes
+constexpr double band = 0.02 * 0.2e-3;
+
+// A window: warp along x through (dx, 0, 0), weft along `weft_dir` through (wx, 0, h).
+struct Win {
+  double xw[9], xf[9];
+};
+Win crossing(double wx, bool parallel = false) {
+  Win w;
+  for (int k = 0; k < 3; ++k) {
+    const double s = (k - 1) * L;
+    w.xw[3 * k] = s, w.xw[3 * k + 1] = 0, w.xw[3 * k + 2] = 0;
+    w.xf[3 * k] = parallel ? s : wx, w.xf[3 * k + 1] = parallel ? 0 : s, w.xf[3 * k + 2] = h;
+  }
+  return w;
+}
+void set_lane(lanes::ClosestBatch& b, int l, const Win& w) {
+  b.xw[l] = w.xw;
+  b.xf[l] = w.xf;
+  b.band[l] = band;
+}
+
+class Lanes : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!lanes::available()) GTEST_SKIP() << "this processor has no AVX2: the solver computes one crossing at a time";
+  }
+};
+
+// Crossing at the tracked nodes: all four segment pairs touch at the nodes and tie, the
+// contact is the node pair itself (weights 0 1 0 on both yarns), |d| = h along z.
+// Weft through x = 0.3 L: only the warp segment kw..kw+1 reaches it, at a = 0.3.
+TEST_F(Lanes, KnownCrossingsGiveTheirClosestPoints) {
+  const Win at_node = crossing(0), offset = crossing(0.3 * L);
+  lanes::ClosestBatch b;
+  set_lane(b, 0, at_node);
+  set_lane(b, 1, offset);
+  set_lane(b, 2, at_node);
+  set_lane(b, 3, offset);
+  lanes::closest4(b);
+  const double tol = 1e-12 * L;
+  for (int l = 0; l < 4; ++l) {
+    SCOPED_TRACE(l);
+    EXPECT_NEAR(b.dist[l], h, tol);
+    EXPECT_NEAR(b.d[0][l], 0, tol);
+    EXPECT_NEAR(b.d[1][l], 0, tol);
+    EXPECT_NEAR(b.d[2][l], h, tol);
+    EXPECT_NEAR(b.wf[0][l], 0, 1e-12);
+    EXPECT_NEAR(b.wf[1][l], 1, 1e-12);
+    EXPECT_NEAR(b.wf[2][l], 0, 1e-12);
+  }
+  // At the node: the first pair (warp kw-1..kw, weft kf-1..kf) ends at the nodes.
+  EXPECT_EQ(b.iw[0], 0);
+  EXPECT_EQ(b.jf[0], 0);
+  EXPECT_NEAR(b.a[0], 1, 1e-12);
+  EXPECT_NEAR(b.ww[0][0], 0, 1e-12);
+  EXPECT_NEAR(b.ww[1][0], 1, 1e-12);
+  EXPECT_NEAR(b.ww[2][0], 0, 1e-12);
+  // Offset: warp segment kw..kw+1 at a = 0.3; the other warp segment is 0.3 L away, far
+  // outside the tie band.
+  EXPECT_EQ(b.iw[1], 1);
+  EXPECT_NEAR(b.a[1], 0.3, 1e-12);
+  EXPECT_NEAR(b.ww[0][1], 0, 1e-12);
+  EXPECT_NEAR(b.ww[1][1], 0.7, 1e-12);
+  EXPECT_NEAR(b.ww[2][1], 0.3, 1e-12);
+}
+
+// Parallel yarns (the closest-point system is singular): finite, |d| = h. A NaN window in
+// one lane leaves the other lanes' results exactly as they are alone.
+TEST_F(Lanes, ParallelSegmentsAndNaNStayInTheirLane) {
+  const Win par = crossing(0, true), offset = crossing(0.3 * L);
+  Win bad = offset;
+  bad.xf[4] = std::numeric_limits<double>::quiet_NaN();
+  lanes::ClosestBatch alone, mixed;
+  for (int l = 0; l < 4; ++l) set_lane(alone, l, l == 1 ? par : offset);
+  set_lane(mixed, 0, offset);
+  set_lane(mixed, 1, par);
+  set_lane(mixed, 2, bad);
+  set_lane(mixed, 3, offset);
+  lanes::closest4(alone);
+  lanes::closest4(mixed);
+  EXPECT_NEAR(alone.dist[1], h, 1e-12 * L);
+  for (int m = 0; m < 3; ++m) EXPECT_TRUE(std::isfinite(alone.d[m][1]));
+  EXPECT_NEAR(alone.d[2][1], h, 1e-12 * L);
+  EXPECT_TRUE(std::isnan(mixed.dist[2]) || std::isnan(mixed.d[2][2]));
+  for (int l : {0, 1, 3}) {
+    SCOPED_TRACE(l);
+    EXPECT_EQ(mixed.dist[l], alone.dist[l]);
+    for (int m = 0; m < 3; ++m) {
+      EXPECT_EQ(mixed.d[m][l], alone.d[m][l]);
+      EXPECT_EQ(mixed.ww[m][l], alone.ww[m][l]);
+      EXPECT_EQ(mixed.wf[m][l], alone.wf[m][l]);
+    }
+    EXPECT_EQ(mixed.a[l], alone.a[l]);
+    EXPECT_EQ(mixed.b[l], alone.b[l]);
+  }
+}
+
+// A whole impact (breaks, ravelled and released crossings, windows at yarn ends that the
+// lanes leave to the one-crossing code) gives the same state bit for bit with the lanes
+// on and off, on one thread and on two.
+TEST_F(Lanes, RunsAreBitIdenticalToOneCrossingAtATime) {
+  const auto base =
+      test::small_patch() + std::vector<std::string>{"projectile.velocity_mps=400", "solver.end_time_us=40"};
+  for (const char* threads : {"solver.threads=1", "solver.threads=2"}) {
+    SCOPED_TRACE(threads);
+    Simulation on(test::scene_with(base + std::vector<std::string>{threads}));
+    Simulation off(test::scene_with(base + std::vector<std::string>{threads, "solver.simd=false"}));
+    ASSERT_TRUE(on.solver().simd_active());
+    ASSERT_FALSE(off.solver().simd_active());
+    for (double t : {5e-6, 20e-6, 40e-6}) {
+      test::run_until(on, t);
+      test::run_until(off, t);
+      EXPECT_EQ(on.state_hash(), off.state_hash()) << "at " << t * 1e6 << " us";
+    }
+    const Summary s = on.summary();
+    EXPECT_GT(s.broken_warp + s.broken_weft, 0) << "the run should exercise broken segments";
+  }
+}
+
+}  // namespace
+}  // namespace ravel
