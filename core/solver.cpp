@@ -524,9 +524,6 @@ class SolverT final : public Solver {
   // the side test and the chord coordinates all work on this window.
   struct Window {
     int kw = 0, kf = 0;
-    const int* wn = nullptr;  // node ids of the warp / weft yarn, by position along it
-    const int* fn = nullptr;
-    int nw = 0, nf = 0;  // yarn sizes
     int wnode[3], fnode[3];
     V3 xw[3], xf[3];
     bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
@@ -534,14 +531,13 @@ class SolverT final : public Solver {
   void load_window(const Crossing& cr, int kw, int kf, Window& w) const {
     w.kw = kw;
     w.kf = kf;
-    w.wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];
-    w.fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
-    w.nw = model_.yarn_size(cr.warp_yarn);
-    w.nf = model_.yarn_size(cr.weft_yarn);
+    const int* wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];  // node ids by position along the yarn
+    const int* fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
+    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
     for (int k = 0; k < 3; ++k) {
       const int iw = kw - 1 + k, jf = kf - 1 + k;
-      w.wnode[k] = (iw >= 0 && iw < w.nw) ? w.wn[iw] : -1;
-      w.fnode[k] = (jf >= 0 && jf < w.nf) ? w.fn[jf] : -1;
+      w.wnode[k] = (iw >= 0 && iw < nw) ? wn[iw] : -1;
+      w.fnode[k] = (jf >= 0 && jf < nf) ? fn[jf] : -1;
       if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
       if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
     }
@@ -696,6 +692,14 @@ class SolverT final : public Solver {
     g.dist = best;
     g.ok = true;
     return g;
+  }
+
+  // Cross product of the first closest pair's warp and weft segments; times the crossing's
+  // fixed sign it is the side test's normal n (SPEC §4), unnormalised.
+  static V3 pair_cross(const Window& w, const ContactGeom& g) {
+    const V3 tw = w.xw[g.sw - w.kw + 2] - w.xw[g.sw - w.kw + 1];
+    const V3 tf = w.xf[g.sf - w.kf + 2] - w.xf[g.sf - w.kf + 1];
+    return tw.cross(tf);
   }
 
   // Is the contact point at an end of the yarn beyond which it has no segment, with the
@@ -991,9 +995,7 @@ class SolverT final : public Solver {
       r.w[3 + k] = g.wf[k];
     }
     // Side test: n from the weave's fixed sign and the current segment directions.
-    const V3 tw = w.xw[g.sw - kw + 2] - w.xw[g.sw - kw + 1];
-    const V3 tf = w.xf[g.sf - kf + 2] - w.xf[g.sf - kf + 1];
-    V3 n = tw.cross(tf);
+    V3 n = pair_cross(w, g);
     const Real nn = n.norm();
     if (nn > Real(1e-20))
       n *= Real(cr.side) / nn;
@@ -1255,9 +1257,7 @@ class SolverT final : public Solver {
       load_window(cr, cr_kw_[c], cr_kf_[c], w);
       const ContactGeom g = closest(cr, w);
       if (!g.ok) continue;
-      const V3 tw = w.xw[g.sw - w.kw + 2] - w.xw[g.sw - w.kw + 1];
-      const V3 tf = w.xf[g.sf - w.kf + 2] - w.xf[g.sf - w.kf + 1];
-      const V3 n = Real(cr.side) * tw.cross(tf);
+      const V3 n = Real(cr.side) * pair_cross(w, g);
       const double D = cr.contact_distance, dist = double(g.dist);
       const double pen = g.d.dot(n) >= Real(0) ? D - dist : (dist > D ? 0.0 : D + dist);
       worst = std::max(worst, pen);
