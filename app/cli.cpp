@@ -80,10 +80,14 @@ std::string scene_path_from(const CommonArgs& a) {
   return path;
 }
 
-Scene load_scene_from(const CommonArgs& a) {
+std::vector<std::string> overrides_from(const CommonArgs& a) {
   std::vector<std::string> ov = a.overrides;
   if (a.threads >= 0) ov.push_back("solver.threads=" + std::to_string(a.threads));
-  return load_scene(scene_path_from(a), ov);
+  return ov;
+}
+
+Scene load_scene_from(const CommonArgs& a) {
+  return load_scene(scene_path_from(a), overrides_from(a));
 }
 
 int jobs_from(const CommonArgs& a) {

@@ -36,7 +36,10 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
 // shipped scene of that name.
 std::string scene_path_from(const CommonArgs& a);
 
-// Load the scene the arguments name (scene_path_from), with --set and --threads.
+// The --set overrides, with --threads N appended as solver.threads=N when given.
+std::vector<std::string> overrides_from(const CommonArgs& a);
+
+// Load the scene the arguments name (scene_path_from), with overrides_from.
 Scene load_scene_from(const CommonArgs& a);
 
 // --jobs N (1..1024; default: one per core). Throws UsageError.

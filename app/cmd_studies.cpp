@@ -137,8 +137,7 @@ int cmd_limit(const Args& args) {
     CommonArgs a = parse_args(args, {"tolerance", "start", "max-runs"}, {"no-fit", "quiet"});
     check_out_dir(a.out_dir);
     const std::string scene_path = scene_path_from(a);
-    std::vector<std::string> ov = a.overrides;
-    if (a.threads >= 0) ov.push_back("solver.threads=" + std::to_string(a.threads));
+    const std::vector<std::string> ov = overrides_from(a);
     const Scene scene = load_scene(scene_path, ov);
     studies::LimitOptions lo;
     lo.tolerance_mps = parse_positive(a, "tolerance", 1.0);
@@ -230,8 +229,7 @@ int cmd_paper(const Args& args) {
     check_out_dir(a.out_dir);
     studies::PaperOptions opt;
     opt.scene_path = scene_path_from(a);
-    opt.overrides = a.overrides;
-    if (a.threads >= 0) opt.overrides.push_back("solver.threads=" + std::to_string(a.threads));
+    opt.overrides = overrides_from(a);
     load_scene(opt.scene_path, opt.overrides);
     opt.out_dir = a.out_dir;
     opt.jobs = jobs_from(a);

@@ -50,6 +50,16 @@ void write_file_atomic(const std::string& path, const std::string& content) {
   }
 }
 
+bool write_file_atomic(const std::string& path, const std::string& content, std::string* error) {
+  try {
+    write_file_atomic(path, content);
+    return true;
+  } catch (const OutputError& e) {
+    if (error) *error = e.what();
+    return false;
+  }
+}
+
 std::vector<std::string> history_columns() {
   return {"t_s",
           "projectile_z_m",

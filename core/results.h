@@ -20,6 +20,8 @@ class OutputError : public std::runtime_error {
 void prepare_output_dir(const std::string& dir);
 // Write `content` to `path` atomically. Throws OutputError naming the path.
 void write_file_atomic(const std::string& path, const std::string& content);
+// The same for writers that report errors as a bool: false, and the message in *error.
+bool write_file_atomic(const std::string& path, const std::string& content, std::string* error);
 
 // The column names of history.csv, in order (t_s first).
 std::vector<std::string> history_columns();

@@ -10,17 +10,6 @@ namespace ravel {
 
 namespace {
 
-// Through the one atomic writer of every ravel output (results.h), as a bool + message.
-bool write_atomic(const std::string& path, const std::string& bytes, std::string* error) {
-  try {
-    write_file_atomic(path, bytes);
-    return true;
-  } catch (const OutputError& e) {
-    if (error) *error = e.what();
-    return false;
-  }
-}
-
 // The appended-data block: each array is a UInt64 byte count followed by its bytes.
 class Appended {
  public:
@@ -143,7 +132,7 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
   std::string bytes = xml.str();
   bytes += app.bytes();
   bytes += "\n  </AppendedData>\n</VTKFile>\n";
-  return write_atomic(path, bytes, error);
+  return write_file_atomic(path, bytes, error);
 }
 
 bool write_pvd(const std::string& path, const std::vector<PvdEntry>& entries, std::string* error) {
@@ -157,7 +146,7 @@ bool write_pvd(const std::string& path, const std::vector<PvdEntry>& entries, st
     xml << "    <DataSet timestep=\"" << t << "\" part=\"0\" file=\"" << e.file << "\"/>\n";
   }
   xml << "  </Collection>\n</VTKFile>\n";
-  return write_atomic(path, xml.str(), error);
+  return write_file_atomic(path, xml.str(), error);
 }
 
 VtkSeries::VtkSeries(std::string dir, std::string base, bool mirror)

@@ -45,13 +45,7 @@ bool write_png(const std::string& path, int width, int height, const std::vector
     if (error) *error = path + ": PNG encoding failed";
     return false;
   }
-  try {
-    write_file_atomic(path, bytes);
-  } catch (const OutputError& e) {
-    if (error) *error = e.what();
-    return false;
-  }
-  return true;
+  return ravel::write_file_atomic(path, bytes, error);
 }
 
 }  // namespace ravel::render
