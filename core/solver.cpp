@@ -969,25 +969,33 @@ class SolverT final : public Solver {
         for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
       }
     }
+    // The rest of each crossing, in three stages over the batch: each stage is a chain of
+    // square roots and divisions, and four independent chains side by side keep the
+    // processor busy where one crossing at a time would wait on each (same operations).
+    bool go[kBatch];
+    FrictionSetup fs[kBatch];
     for (int c = c0; c < c1; ++c)
-      if (cr_active_[c]) crossing_pass(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
+      go[c - c0] = cr_active_[c] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
+    for (int c = c0; c < c1; ++c)
+      if (go[c - c0]) friction_setup(c, w[c - c0], out[c - c0], fs[c - c0]);
+    for (int c = c0; c < c1; ++c)
+      if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
   }
 
-  // Normal correction and friction of one tracked crossing in one pass, given its window
-  // and closest points.
-  void crossing_pass(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, CrossingImpulse& r) {
+  // Normal correction of one tracked crossing in one pass, given its window and closest
+  // points. Returns whether the crossing goes on to friction (not released, not clamped).
+  bool pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, CrossingImpulse& r) {
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
     if (!g.ok) {
       release(c, ev_lost);  // both adjoining segments of a yarn are broken
-      return;
+      return false;
     }
     // Ravelled out: the partner has slipped off a free (or broken) end.
     if (slipped_off(cr.warp_yarn, g.sw, g.a, g.d) || slipped_off(cr.weft_yarn, g.sf, g.b, V3(-g.d))) {
       release(c, ev_ravel);
-      return;
+      return false;
     }
-    const int kw = w.kw, kf = w.kf;
     for (int k = 0; k < 3; ++k) {
       r.node[k] = w.wnode[k];
       r.node[3 + k] = w.fnode[k];
@@ -1016,13 +1024,13 @@ class SolverT final : public Solver {
         // side test flipped because a tracked segment turned over (flung ends after
         // perforation). There is no contact to keep: released quietly.
         release(c, ev_separated);
-        return;
+        return false;
       }
       if (g.dist > D) {
         // Passed through by more than a yarn diameter: a correction of more than 2D in one
         // step; the nearest-pair assumption is broken here.
         release(c, ev_pass);
-        return;
+        return false;
       }
       delta = D + g.dist;
       u = dlen > Real(1e-12) * D ? V3(-g.d / dlen) : n;
@@ -1051,7 +1059,7 @@ class SolverT final : public Solver {
     }
     r.hold = winv >= Real(kMinHeldMobility) * winv_free;
     if (!r.hold) winv = winv_free;
-    if (winv <= Real(0)) return;  // every node clamped
+    if (winv <= Real(0)) return false;  // every node clamped
     if (delta > Real(0)) {
       // Eq 9-10 with node masses: a relative displacement alpha * delta within the step.
       Real dv = delta / dt;
@@ -1076,28 +1084,45 @@ class SolverT final : public Solver {
       cr_fn_step_[c] += double(P / dt);  // Eq 11
     }
     if (last) cr_gap_[c] = double(g.dist - D);
-    // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
-    // material coordinate on each yarn is the partner's contact point projected on this
-    // yarn's chord through its tracked node: continuous in time, unlike the raw closest
-    // point, which jumps between the equivalent segment pairs of the zig-zag.
+    return true;
+  }
+
+  // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
+  // material coordinate on each yarn is the partner's contact point projected on this
+  // yarn's chord through its tracked node: continuous in time, unlike the raw closest
+  // point, which jumps between the equivalent segment pairs of the zig-zag.
+  struct FrictionSetup {
+    double cw, cf;  // material coordinates of the contact on the warp and the weft
+    V3 Tw, Tf;      // unit chord tangents
+    double fwinv;   // inverse effective mass of the contact points' relative motion
+  };
+  void friction_setup(int c, const Window& w, CrossingImpulse& r, FrictionSetup& s) {
+    const Crossing& cr = model_.crossings[c];
+    const int kw = w.kw, kf = w.kf;
     V3 pa = V3::Zero(), pb = V3::Zero();
     for (int k = 0; k < 3; ++k) {
       if (r.node[k] >= 0) pa -= r.w[k] * w.xw[k];
       if (r.node[3 + k] >= 0) pb += r.w[3 + k] * w.xf[k];
     }
-    V3 Tw, Tf;
-    const double cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, Tw);
-    const double cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, Tf);
-    if (cr_stick_w_[c] < 0) cr_stick_w_[c] = cw, cr_stick_f_[c] = cf;
+    s.cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, s.Tw);
+    s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
+    if (cr_stick_w_[c] < 0) cr_stick_w_[c] = s.cw, cr_stick_f_[c] = s.cf;
     Real fa, fb;
-    coord_nodes(cr.warp_yarn, cw, r.fnode[0], r.fnode[1], fa);
-    coord_nodes(cr.weft_yarn, cf, r.fnode[2], r.fnode[3], fb);
+    coord_nodes(cr.warp_yarn, s.cw, r.fnode[0], r.fnode[1], fa);
+    coord_nodes(cr.weft_yarn, s.cf, r.fnode[2], r.fnode[3], fb);
     r.fw[0] = -(Real(1) - fa);
     r.fw[1] = -fa;
     r.fw[2] = Real(1) - fb;
     r.fw[3] = fb;
-    double fwinv = 0;
-    for (int k = 0; k < 4; ++k) fwinv += double(r.fw[k] * r.fw[k]) * model_.inv_mass[r.fnode[k]];
+    s.fwinv = 0;
+    for (int k = 0; k < 4; ++k) s.fwinv += double(r.fw[k] * r.fw[k]) * model_.inv_mass[r.fnode[k]];
+  }
+
+  // Stick or slip on each yarn, and the friction impulse of one pass (Eq 12-15).
+  void pass_friction(int c, Real alpha, bool last, const FrictionSetup& s, CrossingImpulse& r) {
+    const Crossing& cr = model_.crossings[c];
+    const Real dt = Real(model_.dt);
+    const double fwinv = s.fwinv;
     const double fn = cr_fn_step_[c];
     const double limit = model_.friction * fn;
     double ft_w = 0, ft_f = 0, moved = 0;
@@ -1119,12 +1144,12 @@ class SolverT final : public Solver {
           slid = true;
         }
       };
-      one_yarn(cr.warp_yarn, cw, cr_stick_w_[c], ft_w);
-      one_yarn(cr.weft_yarn, cf, cr_stick_f_[c], ft_f);
+      one_yarn(cr.warp_yarn, s.cw, cr_stick_w_[c], ft_w);
+      one_yarn(cr.weft_yarn, s.cf, cr_stick_f_[c], ft_f);
     }
     if (ft_w != 0 || ft_f != 0) {
       // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
-      const V3 Fwarp = Real(ft_w) * Tw - Real(ft_f) * Tf;
+      const V3 Fwarp = Real(ft_w) * s.Tw - Real(ft_f) * s.Tf;
       r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
       r.has_f = true;
       cr_ft_[c] = double(Fwarp.norm());
