@@ -588,7 +588,7 @@ class SolverT final : public Solver {
   // correction is continuous in the state and a mirror-symmetric state gets a
   // mirror-symmetric correction (see docs/MODEL.md).
   static constexpr double kTieBand = 0.02;
-  // The least share of a crossing's mobility the projectile's hold may leave (see crossing_pass).
+  // The least share of a crossing's mobility the projectile's hold may leave (see pass_normal).
   static constexpr double kMinHeldMobility = 0.25;
   struct ContactGeom {
     bool ok = false;
@@ -1246,7 +1246,7 @@ class SolverT final : public Solver {
 
   // A node the projectile pushed out this step rests on a rigid body: the yarn contact's
   // corrections do not move it back into the projectile (apply_impulse, shift_node, and the
-  // effective mass in crossing_pass); the impulse they would have pushed it in with acts on
+  // effective mass in pass_normal); the impulse they would have pushed it in with acts on
   // the projectile instead. Summed here in node order (deterministic for any thread count).
   void release_held() {
     if (held_list_.empty()) return;
@@ -1347,7 +1347,7 @@ class SolverT final : public Solver {
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
   std::vector<std::uint8_t> held_flag_;    // held_n_ is nonzero (a compact test for the hot loops)
-  std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections gathered per node (apply_pass)
+  std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections summed per node (gather, finish_pass)
   V3 proj_impulse_ = V3::Zero();           // the projectile contact's impulse on the projectile this step
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
