@@ -485,12 +485,18 @@ class SolverT final : public Solver {
     return (x_[ynode(yarn, s + 1)] - x_[ynode(yarn, s)]).norm();
   }
 
+  // int(std::floor(u)) for a material coordinate. Those are >= 0 but for rounding, and the
+  // truncating conversion is then the floor in one instruction (std::floor is a libm-like
+  // sequence on the baseline x86-64 without SSE4.1's roundsd).
+  static int floor_int(double u) {
+    return u >= 0 ? int(u) : int(std::floor(u));
+  }
   // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
   Real arc_between(int yarn, double u0, double u1) const {
     const int n = model_.yarn_size(yarn);
     double sign = 1;
     if (u1 < u0) std::swap(u0, u1), sign = -1;
-    int s0 = std::min(int(std::floor(u0)), n - 2), s1 = std::min(int(std::floor(u1)), n - 2);
+    int s0 = std::min(floor_int(u0), n - 2), s1 = std::min(floor_int(u1), n - 2);
     if (s0 == s1) return Real(sign * (u1 - u0)) * seg_len(yarn, s0);
     Real acc = Real(s0 + 1 - u0) * seg_len(yarn, s0);
     for (int s = s0 + 1; s < s1; ++s) acc += seg_len(yarn, s);
@@ -500,7 +506,7 @@ class SolverT final : public Solver {
   // Material coordinate reached by moving an arc length `arc` (signed) from u.
   double advance(int yarn, double u, double arc) const {
     const int n = model_.yarn_size(yarn);
-    int s = std::min(int(std::floor(u)), n - 2);
+    int s = std::min(floor_int(u), n - 2);
     double frac = u - s;
     while (true) {
       const double L = double(seg_len(yarn, s));
@@ -541,9 +547,13 @@ class SolverT final : public Solver {
       if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
       if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
     }
+    // seg_ok of segments kw - 1, kw and kf - 1, kf, with each yarn's offsets looked up once.
+    const std::uint8_t* wb = &broken_flag_[model_.yarn_elem_offset[cr.warp_yarn]];
+    const std::uint8_t* fb = &broken_flag_[model_.yarn_elem_offset[cr.weft_yarn]];
     for (int k = 0; k < 2; ++k) {
-      w.wseg[k] = seg_ok(cr.warp_yarn, kw - 1 + k);
-      w.fseg[k] = seg_ok(cr.weft_yarn, kf - 1 + k);
+      const int sw = kw - 1 + k, sf = kf - 1 + k;
+      w.wseg[k] = sw >= 0 && sw + 1 < nw && !wb[sw];
+      w.fseg[k] = sf >= 0 && sf + 1 < nf && !fb[sf];
     }
   }
 
@@ -747,7 +757,7 @@ class SolverT final : public Solver {
   }
   // The two nodes and fraction of a material coordinate.
   void coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
-    const int s = std::clamp(int(std::floor(u)), 0, model_.yarn_size(yarn) - 2);
+    const int s = std::clamp(floor_int(u), 0, model_.yarn_size(yarn) - 2);
     frac = Real(std::clamp(u - s, 0.0, 1.0));
     n0 = ynode(yarn, s);
     n1 = ynode(yarn, s + 1);
@@ -765,6 +775,7 @@ class SolverT final : public Solver {
     Real fw[4];
     V3 F;  // friction impulse on the weft contact point (Eq 15)
     bool has_n, has_f, has_s;
+    bool any_held;  // a window node is held by the projectile (set by pass_normal)
     bool hold;  // nodes the projectile holds do not yield into it (release_held)
   };
 
@@ -846,12 +857,23 @@ class SolverT final : public Solver {
   // projectile. Returns whether the record touches a held node.
   static constexpr int kSums = 1, kHeld = 2;
   bool gather(const CrossingImpulse& r, int lo, int hi, int what) {
+    if (!r.any_held && (what & kSums) && lo == 0 && hi == model_.node_count) {
+      // The common case, one thread and no held node: every weight goes to the sums.
+      auto each = [](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum) {
+        for (int k = 0; k < count; ++k)
+          if (nodes[k] >= 0 && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
+      };
+      if (r.has_n) each(6, r.node, r.w, r.P, sum_n_);
+      if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_);
+      if (r.has_s) each(6, r.node, r.w, r.S, sum_s_);
+      return false;
+    }
     bool held = false;
     // One kind of correction: weights w on nodes, times the vector q.
     auto each = [&](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum, auto&& take_held) {
       for (int k = 0; k < count; ++k) {
         const int i = nodes[k];
-        if (i < lo || i >= hi || w[k] == Real(0)) continue;
+        if (unsigned(i - lo) >= unsigned(hi - lo) || w[k] == Real(0)) continue;  // i in [lo, hi), -1 not
         if (held_flag_[i]) {
           held = true;
           if (what & kHeld) take_held(i, w[k] * q);
@@ -935,7 +957,7 @@ class SolverT final : public Solver {
     for (int c = c0; c < c1; ++c) {
       const int k = c - c0;
       CrossingImpulse& r = out[k];
-      r.has_n = r.has_f = r.has_s = r.hold = false;
+      r.has_n = r.has_f = r.has_s = r.hold = r.any_held = false;
       lane[k] = -1;
       if (!cr_active_[c]) continue;
       if (track(c, w[k])) cr_event_[c] |= ev_skip;
@@ -1051,11 +1073,16 @@ class SolverT final : public Solver {
     for (int k = 0; k < 6; ++k) {
       const int i = r.node[k];
       if (i < 0) continue;
-      const Real un = held_flag_[i] ? u.dot(held_n_[i]) : Real(0);
-      const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
       const Real wi = r.w[k] * r.w[k] * Real(model_.inv_mass[i]);
-      winv += wi * free;
       winv_free += wi;
+      if (!held_flag_[i]) {
+        winv += wi;  // free = 1 exactly
+        continue;
+      }
+      r.any_held = true;
+      const Real un = u.dot(held_n_[i]);
+      const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
+      winv += wi * free;
     }
     r.hold = winv >= Real(kMinHeldMobility) * winv_free;
     if (!r.hold) winv = winv_free;
