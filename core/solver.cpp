@@ -445,7 +445,7 @@ class SolverT final : public Solver {
       const std::uint8_t fx = model_.fixed[i];
       if (fx == fix_all) continue;
       V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
-      zero_fixed(v, fx);
+      if (fx) zero_fixed(v, fx);
       v_[i] = v;
       x_[i] += dt * v;
       maxr2 = std::max(maxr2, double(x_[i].squaredNorm()));
@@ -900,9 +900,11 @@ class SolverT final : public Solver {
       sum_n_[i].setZero();
       sum_f_[i].setZero();
       sum_s_[i].setZero();
-      zero_fixed(dvn, fx);
-      zero_fixed(dvf, fx);
-      zero_fixed(dx, fx);
+      if (fx) {
+        zero_fixed(dvn, fx);
+        zero_fixed(dvf, fx);
+        zero_fixed(dx, fx);
+      }
       const V3 dv = dvn + dvf;
       v_[i] += dv;
       dv_contact_[i] += dvn;
@@ -950,17 +952,39 @@ class SolverT final : public Solver {
   void crossing_batch(int c0, int c1, Real alpha, bool last, CrossingImpulse* out) {
     Window w[kBatch];
     ContactGeom g[kBatch];
+    bool on[kBatch];
+    for (int c = c0; c < c1; ++c) {
+      CrossingImpulse& r = out[c - c0];
+      r.has_n = r.has_f = r.has_s = r.hold = r.any_held = false;
+      on[c - c0] = cr_active_[c];
+      if (on[c - c0] && track(c, w[c - c0])) cr_event_[c] |= ev_skip;
+    }
+    closest_batch(c0, c1, on, w, g);
+    // The rest of each crossing, in three stages over the batch: each stage is a chain of
+    // square roots and divisions, and four independent chains side by side keep the
+    // processor busy where one crossing at a time would wait on each (same operations).
+    bool go[kBatch];
+    FrictionSetup fs[kBatch];
+    for (int c = c0; c < c1; ++c)
+      go[c - c0] = on[c - c0] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
+    for (int c = c0; c < c1; ++c)
+      if (go[c - c0]) friction_setup(c, w[c - c0], out[c - c0], fs[c - c0]);
+    for (int c = c0; c < c1; ++c)
+      if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
+  }
+
+  // The closest points of the crossings c in [c0, c1) with on[c - c0] set, from their loaded
+  // windows: those whose four segments are intact together in lanes (when on and the
+  // processor has them; the same numbers bit for bit), the others one at a time.
+  void closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g) const {
     int lane[kBatch];
     const bool use_lanes = lanes_on();
     lanes::ClosestBatch lb;
     int nl = 0;
     for (int c = c0; c < c1; ++c) {
       const int k = c - c0;
-      CrossingImpulse& r = out[k];
-      r.has_n = r.has_f = r.has_s = r.hold = r.any_held = false;
       lane[k] = -1;
-      if (!cr_active_[c]) continue;
-      if (track(c, w[k])) cr_event_[c] |= ev_skip;
+      if (!on[k]) continue;
       const Crossing& cr = model_.crossings[c];
       if constexpr (std::is_same_v<Real, double>) {
         if (use_lanes && w[k].wseg[0] && w[k].wseg[1] && w[k].fseg[0] && w[k].fseg[1]) {
@@ -991,17 +1015,6 @@ class SolverT final : public Solver {
         for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
       }
     }
-    // The rest of each crossing, in three stages over the batch: each stage is a chain of
-    // square roots and divisions, and four independent chains side by side keep the
-    // processor busy where one crossing at a time would wait on each (same operations).
-    bool go[kBatch];
-    FrictionSetup fs[kBatch];
-    for (int c = c0; c < c1; ++c)
-      go[c - c0] = cr_active_[c] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
-    for (int c = c0; c < c1; ++c)
-      if (go[c - c0]) friction_setup(c, w[c - c0], out[c - c0], fs[c - c0]);
-    for (int c = c0; c < c1; ++c)
-      if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
   }
 
   // Normal correction of one tracked crossing in one pass, given its window and closest
@@ -1300,19 +1313,28 @@ class SolverT final : public Solver {
   static constexpr int kPenetrationCheckEvery = 8;
   void residual_penetration() {
     const int nc = int(model_.crossings.size());
+    const int nb = (nc + kBatch - 1) / kBatch;
     double worst = 0;
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : worst) if (threads_ > 1)
-    for (int c = 0; c < nc; ++c) {
-      if (!cr_active_[c]) continue;
-      const Crossing& cr = model_.crossings[c];
-      Window w;
-      load_window(cr, cr_kw_[c], cr_kf_[c], w);
-      const ContactGeom g = closest(cr, w);
-      if (!g.ok) continue;
-      const V3 n = Real(cr.side) * pair_cross(w, g);
-      const double D = cr.contact_distance, dist = double(g.dist);
-      const double pen = g.d.dot(n) >= Real(0) ? D - dist : (dist > D ? 0.0 : D + dist);
-      worst = std::max(worst, pen);
+    for (int b = 0; b < nb; ++b) {
+      const int c0 = b * kBatch, c1 = std::min(nc, c0 + kBatch);
+      Window w[kBatch];
+      ContactGeom g[kBatch];
+      bool on[kBatch];
+      for (int c = c0; c < c1; ++c) {
+        on[c - c0] = cr_active_[c];
+        if (on[c - c0]) load_window(model_.crossings[c], cr_kw_[c], cr_kf_[c], w[c - c0]);
+      }
+      closest_batch(c0, c1, on, w, g);
+      for (int c = c0; c < c1; ++c) {
+        const int k = c - c0;
+        if (!on[k] || !g[k].ok) continue;
+        const Crossing& cr = model_.crossings[c];
+        const V3 n = Real(cr.side) * pair_cross(w[k], g[k]);
+        const double D = cr.contact_distance, dist = double(g[k].dist);
+        const double pen = g[k].d.dot(n) >= Real(0) ? D - dist : (dist > D ? 0.0 : D + dist);
+        worst = std::max(worst, pen);
+      }
     }
     diag_.max_penetration = std::max(diag_.max_penetration, worst);
   }
