@@ -131,25 +131,28 @@ Model build_model(const Scene& scene) {
   } else if (sliding) {
     m.warp_count = ni;
     m.weft_count = nj;
-    // Warp yarn I (along y): node at every J, z = +L1/2 where the warp is on top.
-    for (int I = g.i_min; I <= g.i_max; ++I) {
+    // Node ids interleave the two yarns at each crossing: warp node (I, J), then weft node
+    // (I, J), with J running fastest, the order the contact pass visits crossings in. A
+    // crossing's six window nodes then lie in three sequential streams (grid rows I - 1, I,
+    // I + 1) instead of one weft node per crossing a whole row apart (see docs/MODEL.md §1).
+    std::vector<int> wid(size_t(ni) * nj), fid(size_t(ni) * nj);
+    for (int I = g.i_min; I <= g.i_max; ++I)
       for (int J = g.j_min; J <= g.j_max; ++J) {
-        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;
-        int n = add_node(Vec3d(I * L0, J * L0, warp_top ? 0.5 * L1 : -0.5 * L1), node_mass * plane_factor(I, J),
-                         fixed_bits(I, J));
-        m.yarn_nodes.push_back(n);
+        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;  // warp yarn I runs along y
+        const size_t at = size_t(I - g.i_min) * nj + (J - g.j_min);
+        wid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? 0.5 * L1 : -0.5 * L1), node_mass * plane_factor(I, J),
+                           fixed_bits(I, J));
+        fid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? -0.5 * L1 : 0.5 * L1), node_mass * plane_factor(I, J),
+                           fixed_bits(I, J));
       }
+    for (int I = g.i_min; I <= g.i_max; ++I) {
+      for (int J = g.j_min; J <= g.j_max; ++J) m.yarn_nodes.push_back(wid[size_t(I - g.i_min) * nj + (J - g.j_min)]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(warp);
       m.yarn_grid.push_back(I);
     }
     for (int J = g.j_min; J <= g.j_max; ++J) {
-      for (int I = g.i_min; I <= g.i_max; ++I) {
-        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;
-        int n = add_node(Vec3d(I * L0, J * L0, warp_top ? -0.5 * L1 : 0.5 * L1), node_mass * plane_factor(I, J),
-                         fixed_bits(I, J));
-        m.yarn_nodes.push_back(n);
-      }
+      for (int I = g.i_min; I <= g.i_max; ++I) m.yarn_nodes.push_back(fid[size_t(I - g.i_min) * nj + (J - g.j_min)]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(weft);
       m.yarn_grid.push_back(J);
