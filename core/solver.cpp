@@ -529,7 +529,7 @@ class SolverT final : public Solver {
   // segments of each yarn next to the tracked node are intact. Tracking, the closest points,
   // the side test and the chord coordinates all work on this window.
   struct Window {
-    int kw = 0, kf = 0;
+    int kw, kf;  // set by load_window
     int wnode[3], fnode[3];
     V3 xw[3], xf[3];
     bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
@@ -600,18 +600,21 @@ class SolverT final : public Solver {
   static constexpr double kTieBand = 0.02;
   // The least share of a crossing's mobility the projectile's hold may leave (see pass_normal).
   static constexpr double kMinHeldMobility = 0.25;
+  // No member initialisers: the batches' arrays of these are filled, not cleared first
+  // (closest starts from a zeroed one, the lanes set every field).
   struct ContactGeom {
-    bool ok = false;
-    int sw = 0, sf = 0;  // the first closest pair (for the end-of-yarn tests)
-    Real a = 0, b = 0;
-    V3 d = V3::Zero();       // contact vector warp -> weft (mean over tied pairs)
-    Real dist = 0;           // smallest |d|
-    Real ww[3] = {0, 0, 0};  // weights on warp nodes kw-1, kw, kw+1
-    Real wf[3] = {0, 0, 0};  // weights on weft nodes kf-1, kf, kf+1
+    bool ok;
+    int sw, sf;  // the first closest pair (for the end-of-yarn tests)
+    Real a, b;
+    V3 d;        // contact vector warp -> weft (mean over tied pairs)
+    Real dist;   // smallest |d|
+    Real ww[3];  // weights on warp nodes kw-1, kw, kw+1
+    Real wf[3];  // weights on weft nodes kf-1, kf, kf+1
   };
 
   ContactGeom closest(const Crossing& cr, const Window& w) const {
-    ContactGeom g;
+    ContactGeom g{};
+    g.d.setZero();
     const int kw = w.kw, kf = w.kf;
     // The up to 2 segments of each yarn next to the tracked node: start point, direction,
     // squared length (done once, each segment serves two pairs).
