@@ -42,6 +42,21 @@ RAVEL_AVX2 v4 dot(v4 ax, v4 ay, v4 az, v4 bx, v4 by, v4 bz) {
   return ax * bx + ay * by + az * bz;
 }
 
+// SolverT::chord_coord with both neighbours of the tracked node present: the offset of
+// point p along the chord xs[0] -> xs[2] from xs[1], in node spacings (span 2), clamped to
+// [-1, 1], and the chord's unit tangent; 0 and a zero tangent for a chord of no length.
+RAVEL_AVX2 void chord4(const v4 (*xs)[3], const v4* p, double* off, double (*tangent)[kWidth]) {
+  const v4 zero = splat(0), one = splat(1), lo = splat(-1);
+  const v4 T[3] = {xs[2][0] - xs[0][0], xs[2][1] - xs[0][1], xs[2][2] - xs[0][2]};
+  const v4 T2 = dot(T[0], T[1], T[2], T[0], T[1], T[2]);
+  const m4 none = T2 <= zero;
+  const v4 r = _mm256_sqrt_pd(T2);
+  for (int m = 0; m < 3; ++m) store(tangent[m], none ? zero : T[m] / r);
+  const v4 q[3] = {p[0] - xs[1][0], p[1] - xs[1][1], p[2] - xs[1][2]};
+  const v4 o = (dot(q[0], q[1], q[2], T[0], T[1], T[2]) / T2) * splat(2);
+  store(off, none ? zero : (o < lo ? lo : (one < o ? one : o)));
+}
+
 }  // namespace
 
 __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
@@ -109,13 +124,44 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
     wf[j + 1] = keep ? wf[j + 1] + wq * cb[q] : wf[j + 1];
   }
   const v4 inv = one / wsum;
-  for (int m = 0; m < 3; ++m) store(s.d[m], gd[m] * inv);
-  for (int k = 0; k < 3; ++k) store(s.ww[k], ww[k] * inv), store(s.wf[k], wf[k] * inv);
+  v4 d[3];
+  for (int m = 0; m < 3; ++m) d[m] = gd[m] * inv, store(s.d[m], d[m]);
+  for (int k = 0; k < 3; ++k) ww[k] = ww[k] * inv, wf[k] = wf[k] * inv, store(s.ww[k], ww[k]), store(s.wf[k], wf[k]);
   store(s.dist, best);
   store(s.a, ga);
   store(s.b, gb);
   std::memcpy(s.iw, &gi, sizeof gi);
   std::memcpy(s.jf, &gj, sizeof gj);
+
+  // SolverT::pass_normal's side-test normal: the first closest pair's segments crossed
+  // (Eigen's cross), scaled by side / |.|, or (0, 0, -+1) when they are parallel.
+  const m4 i0 = gi == m4{0, 0, 0, 0}, j0 = gj == m4{0, 0, 0, 0};
+  v4 tw[3], tf[3];
+  for (int m = 0; m < 3; ++m) tw[m] = i0 ? d1[0][m] : d1[1][m], tf[m] = j0 ? d2[0][m] : d2[1][m];
+  v4 n[3] = {tw[1] * tf[2] - tw[2] * tf[1], tw[2] * tf[0] - tw[0] * tf[2], tw[0] * tf[1] - tw[1] * tf[0]};
+  const v4 nn = _mm256_sqrt_pd(dot(n[0], n[1], n[2], n[0], n[1], n[2]));
+  const v4 side = load(s.side), sn = side / nn;
+  const m4 flat = ~(nn > splat(1e-20));
+  n[0] = flat ? zero : n[0] * sn;
+  n[1] = flat ? zero : n[1] * sn;
+  n[2] = flat ? (side > zero ? splat(-1) : one) : n[2] * sn;
+  for (int m = 0; m < 3; ++m) store(s.n[m], n[m]);
+  // |d| and d / |d|.
+  const v4 dlen = _mm256_sqrt_pd(dot(d[0], d[1], d[2], d[0], d[1], d[2]));
+  store(s.dlen, dlen);
+  for (int m = 0; m < 3; ++m) store(s.ud[m], d[m] / dlen);
+  // SolverT::friction_setup: the contact points (pa on the warp from the weights
+  // -(-ww), pb on the weft), then SolverT::chord_coord of each on the other yarn's chord
+  // through its tracked node (both neighbours present: span 2, offsets clamped to [-1, 1]).
+  v4 pa[3] = {zero, zero, zero}, pb[3] = {zero, zero, zero};
+  for (int k = 0; k < 3; ++k) {
+    const v4 rw = -ww[k];
+    for (int m = 0; m < 3; ++m) pa[m] = pa[m] - rw * xw[k][m], pb[m] = pb[m] + wf[k] * xf[k][m];
+  }
+  chord4(xw, pb, s.offw, s.tw);
+  chord4(xf, pa, s.offf, s.tf);
+  // Segment lengths (SolverT::seg_len), for the friction's arc lengths.
+  for (int k = 0; k < 2; ++k) store(s.lw[k], _mm256_sqrt_pd(aa[k])), store(s.lf[k], _mm256_sqrt_pd(ee[k]));
 }
 
 }  // namespace ravel::lanes

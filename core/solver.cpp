@@ -491,8 +491,20 @@ class SolverT final : public Solver {
   static int floor_int(double u) {
     return u >= 0 ? int(u) : int(std::floor(u));
   }
+  // Lengths of two consecutive segments of a yarn, first and first + 1, known already (the
+  // lanes measured them); other segments are measured when asked for.
+  struct KnownLengths {
+    int first = -(1 << 30);  // none
+    Real len[2];
+  };
+  Real seg_len(int yarn, int s, const KnownLengths& known) const {
+    const unsigned i = unsigned(s - known.first);
+    return i < 2 ? known.len[i] : seg_len(yarn, s);
+  }
+
   // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
-  Real arc_between(int yarn, double u0, double u1) const {
+  Real arc_between(int yarn, double u0, double u1, const KnownLengths& known = {}) const {
+    auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
     const int n = model_.yarn_size(yarn);
     double sign = 1;
     if (u1 < u0) std::swap(u0, u1), sign = -1;
@@ -504,7 +516,8 @@ class SolverT final : public Solver {
     return Real(sign) * acc;
   }
   // Material coordinate reached by moving an arc length `arc` (signed) from u.
-  double advance(int yarn, double u, double arc) const {
+  double advance(int yarn, double u, double arc, const KnownLengths& known = {}) const {
+    auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
     const int n = model_.yarn_size(yarn);
     int s = std::min(floor_int(u), n - 2);
     double frac = u - s;
@@ -610,11 +623,14 @@ class SolverT final : public Solver {
     Real dist;   // smallest |d|
     Real ww[3];  // weights on warp nodes kw-1, kw, kw+1
     Real wf[3];  // weights on weft nodes kf-1, kf, kf+1
+    int lane;    // computed in this lane of the batch's lanes::ClosestBatch, which then has the
+                 // rest of the window's geometry too; -1: computed alone
   };
 
   ContactGeom closest(const Crossing& cr, const Window& w) const {
     ContactGeom g{};
     g.d.setZero();
+    g.lane = -1;
     const int kw = w.kw, kf = w.kf;
     // The up to 2 segments of each yarn next to the tracked node: start point, direction,
     // squared length (done once, each segment serves two pairs).
@@ -962,16 +978,17 @@ class SolverT final : public Solver {
       on[c - c0] = cr_active_[c];
       if (on[c - c0] && track(c, w[c - c0])) cr_event_[c] |= ev_skip;
     }
-    closest_batch(c0, c1, on, w, g);
+    lanes::ClosestBatch lb;
+    closest_batch(c0, c1, on, w, g, lb);
     // The rest of each crossing, in three stages over the batch: each stage is a chain of
     // square roots and divisions, and four independent chains side by side keep the
     // processor busy where one crossing at a time would wait on each (same operations).
     bool go[kBatch];
     FrictionSetup fs[kBatch];
     for (int c = c0; c < c1; ++c)
-      go[c - c0] = on[c - c0] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], out[c - c0]);
+      go[c - c0] = on[c - c0] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], lb, out[c - c0]);
     for (int c = c0; c < c1; ++c)
-      if (go[c - c0]) friction_setup(c, w[c - c0], out[c - c0], fs[c - c0]);
+      if (go[c - c0]) friction_setup(c, w[c - c0], g[c - c0], lb, out[c - c0], fs[c - c0]);
     for (int c = c0; c < c1; ++c)
       if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
   }
@@ -979,10 +996,9 @@ class SolverT final : public Solver {
   // The closest points of the crossings c in [c0, c1) with on[c - c0] set, from their loaded
   // windows: those whose four segments are intact together in lanes (when on and the
   // processor has them; the same numbers bit for bit), the others one at a time.
-  void closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g) const {
+  void closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g, lanes::ClosestBatch& lb) const {
     int lane[kBatch];
     const bool use_lanes = lanes_on();
-    lanes::ClosestBatch lb;
     int nl = 0;
     for (int c = c0; c < c1; ++c) {
       const int k = c - c0;
@@ -994,6 +1010,7 @@ class SolverT final : public Solver {
           lb.xw[nl] = w[k].xw[0].data();  // V3 xw[3]: 9 consecutive doubles
           lb.xf[nl] = w[k].xf[0].data();
           lb.band[nl] = double(Real(kTieBand) * Real(cr.contact_distance));
+          lb.side[nl] = cr.side;
           lane[k] = nl++;
           continue;
         }
@@ -1002,7 +1019,8 @@ class SolverT final : public Solver {
     }
     if (nl > 0) {
       // Unused lanes repeat lane 0 (their results are not read).
-      for (int l = nl; l < lanes::kWidth; ++l) lb.xw[l] = lb.xw[0], lb.xf[l] = lb.xf[0], lb.band[l] = lb.band[0];
+      for (int l = nl; l < lanes::kWidth; ++l)
+        lb.xw[l] = lb.xw[0], lb.xf[l] = lb.xf[0], lb.band[l] = lb.band[0], lb.side[l] = lb.side[0];
       lanes::closest4(lb);
       for (int k = 0; k < c1 - c0; ++k) {
         const int l = lane[k];
@@ -1016,13 +1034,15 @@ class SolverT final : public Solver {
         q.d = V3(Real(lb.d[0][l]), Real(lb.d[1][l]), Real(lb.d[2][l]));
         q.dist = Real(lb.dist[l]);
         for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
+        q.lane = l;
       }
     }
   }
 
   // Normal correction of one tracked crossing in one pass, given its window and closest
   // points. Returns whether the crossing goes on to friction (not released, not clamped).
-  bool pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, CrossingImpulse& r) {
+  bool pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, const lanes::ClosestBatch& lb,
+                   CrossingImpulse& r) {
     const Crossing& cr = model_.crossings[c];
     const Real dt = Real(model_.dt);
     if (!g.ok) {
@@ -1040,20 +1060,31 @@ class SolverT final : public Solver {
       r.w[k] = -g.ww[k];
       r.w[3 + k] = g.wf[k];
     }
-    // Side test: n from the weave's fixed sign and the current segment directions.
-    V3 n = pair_cross(w, g);
-    const Real nn = n.norm();
-    if (nn > Real(1e-20))
-      n *= Real(cr.side) / nn;
-    else
-      n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+    // Side test: n from the weave's fixed sign and the current segment directions (from the
+    // lanes when they did this crossing: the same numbers).
+    const int l = g.lane;
+    V3 n;
+    Real dlen;
+    if (l >= 0) {
+      n = V3(Real(lb.n[0][l]), Real(lb.n[1][l]), Real(lb.n[2][l]));
+      dlen = Real(lb.dlen[l]);
+    } else {
+      n = pair_cross(w, g);
+      const Real nn = n.norm();
+      if (nn > Real(1e-20))
+        n *= Real(cr.side) / nn;
+      else
+        n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+      dlen = g.d.norm();
+    }
+    // d / |d| ((-d) / |d| is its negative exactly).
+    auto unit_d = [&] { return l >= 0 ? V3(Real(lb.ud[0][l]), Real(lb.ud[1][l]), Real(lb.ud[2][l])) : V3(g.d / dlen); };
     const Real D = Real(cr.contact_distance);
-    const Real dlen = g.d.norm();
     Real delta;
     V3 u;
     if (g.d.dot(n) >= Real(0)) {
       delta = D - g.dist;
-      u = dlen > Real(1e-12) * D ? V3(g.d / dlen) : n;
+      u = dlen > Real(1e-12) * D ? unit_d() : n;
     } else {
       if (g.dist > D && cr_gap_[c] > 0) {
         // On the "wrong" side by more than D, but apart (|d| > D) at the end of the last
@@ -1071,7 +1102,7 @@ class SolverT final : public Solver {
         return false;
       }
       delta = D + g.dist;
-      u = dlen > Real(1e-12) * D ? V3(-g.d / dlen) : n;
+      u = dlen > Real(1e-12) * D ? V3(-unit_d()) : n;
     }
     // A crossing on a symmetry plane is its own mirror image: its mirror contact pair ties
     // with this one, and the pair's mean direction has no component across the plane.
@@ -1135,20 +1166,34 @@ class SolverT final : public Solver {
   // yarn's chord through its tracked node: continuous in time, unlike the raw closest
   // point, which jumps between the equivalent segment pairs of the zig-zag.
   struct FrictionSetup {
-    double cw, cf;  // material coordinates of the contact on the warp and the weft
-    V3 Tw, Tf;      // unit chord tangents
-    double fwinv;   // inverse effective mass of the contact points' relative motion
+    double cw, cf;        // material coordinates of the contact on the warp and the weft
+    V3 Tw, Tf;            // unit chord tangents
+    double fwinv;         // inverse effective mass of the contact points' relative motion
+    KnownLengths lw, lf;  // the window's segment lengths, when the lanes measured them
   };
-  void friction_setup(int c, const Window& w, CrossingImpulse& r, FrictionSetup& s) {
+  void friction_setup(int c, const Window& w, const ContactGeom& g, const lanes::ClosestBatch& lb, CrossingImpulse& r,
+                      FrictionSetup& s) {
     const Crossing& cr = model_.crossings[c];
     const int kw = w.kw, kf = w.kf;
-    V3 pa = V3::Zero(), pb = V3::Zero();
-    for (int k = 0; k < 3; ++k) {
-      if (r.node[k] >= 0) pa -= r.w[k] * w.xw[k];
-      if (r.node[3 + k] >= 0) pb += r.w[3 + k] * w.xf[k];
+    if (const int l = g.lane; l >= 0) {
+      // The lanes did chord_coord for this crossing (all four window segments intact).
+      s.cw = kw + double(lb.offw[l]);
+      s.cf = kf + double(lb.offf[l]);
+      s.Tw = V3(Real(lb.tw[0][l]), Real(lb.tw[1][l]), Real(lb.tw[2][l]));
+      s.Tf = V3(Real(lb.tf[0][l]), Real(lb.tf[1][l]), Real(lb.tf[2][l]));
+      s.lw.first = kw - 1;
+      s.lf.first = kf - 1;
+      for (int k = 0; k < 2; ++k) s.lw.len[k] = Real(lb.lw[k][l]), s.lf.len[k] = Real(lb.lf[k][l]);
+    } else {
+      V3 pa = V3::Zero(), pb = V3::Zero();
+      for (int k = 0; k < 3; ++k) {
+        if (r.node[k] >= 0) pa -= r.w[k] * w.xw[k];
+        if (r.node[3 + k] >= 0) pb += r.w[3 + k] * w.xf[k];
+      }
+      s.cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, s.Tw);
+      s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
+      s.lw = s.lf = KnownLengths{};
     }
-    s.cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, s.Tw);
-    s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
     if (cr_stick_w_[c] < 0) cr_stick_w_[c] = s.cw, cr_stick_f_[c] = s.cf;
     Real fa, fb;
     coord_nodes(cr.warp_yarn, s.cw, r.fnode[0], r.fnode[1], fa);
@@ -1174,21 +1219,21 @@ class SolverT final : public Solver {
       // K = alpha_f m / dt^2, m the effective mass of the relative motion: alpha_f = 1
       // returns the contact to its stuck point in exactly one step.
       const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
-      auto one_yarn = [&](int yarn, double cur, double& stick, double& force) {
-        const double slip = double(arc_between(yarn, stick, cur));  // Delta s of Eq 12
+      auto one_yarn = [&](int yarn, double cur, double& stick, double& force, const KnownLengths& known) {
+        const double slip = double(arc_between(yarn, stick, cur, known));  // Delta s of Eq 12
         const double trial = K * slip;
         if (std::abs(trial) <= limit) {
           force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
         } else {
           force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
-          const double new_stick = advance(yarn, cur, -force / K);
-          moved += std::abs(double(arc_between(yarn, stick, new_stick)));
+          const double new_stick = advance(yarn, cur, -force / K, known);
+          moved += std::abs(double(arc_between(yarn, stick, new_stick, known)));
           stick = new_stick;
           slid = true;
         }
       };
-      one_yarn(cr.warp_yarn, s.cw, cr_stick_w_[c], ft_w);
-      one_yarn(cr.weft_yarn, s.cf, cr_stick_f_[c], ft_f);
+      one_yarn(cr.warp_yarn, s.cw, cr_stick_w_[c], ft_w, s.lw);
+      one_yarn(cr.weft_yarn, s.cf, cr_stick_f_[c], ft_f, s.lf);
     }
     if (ft_w != 0 || ft_f != 0) {
       // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
@@ -1328,7 +1373,8 @@ class SolverT final : public Solver {
         on[c - c0] = cr_active_[c];
         if (on[c - c0]) load_window(model_.crossings[c], cr_kw_[c], cr_kf_[c], w[c - c0]);
       }
-      closest_batch(c0, c1, on, w, g);
+      lanes::ClosestBatch lb;
+      closest_batch(c0, c1, on, w, g, lb);
       for (int c = c0; c < c1; ++c) {
         const int k = c - c0;
         if (!on[k] || !g[k].ok) continue;

@@ -32,10 +32,11 @@ Win crossing(double wx, bool parallel = false) {
   }
   return w;
 }
-void set_lane(lanes::ClosestBatch& b, int l, const Win& w) {
+void set_lane(lanes::ClosestBatch& b, int l, const Win& w, double side = 1) {
   b.xw[l] = w.xw;
   b.xf[l] = w.xf;
   b.band[l] = band;
+  b.side[l] = side;
 }
 
 class Lanes : public ::testing::Test {
@@ -81,6 +82,46 @@ TEST_F(Lanes, KnownCrossingsGiveTheirClosestPoints) {
   EXPECT_NEAR(b.ww[0][1], 0, 1e-12);
   EXPECT_NEAR(b.ww[1][1], 0.7, 1e-12);
   EXPECT_NEAR(b.ww[2][1], 0.3, 1e-12);
+}
+
+// The rest of the geometry: the side-test normal (warp along x, weft along y: x cross y =
+// +z, times the side sign), |d| and d / |d|, where the contact sits along each yarn's chord
+// (the weft through x = 0.3 L meets the warp 0.3 node spacings past its tracked node, and
+// the warp meets the weft at the weft's node), the chords' directions, and the segment lengths.
+TEST_F(Lanes, NormalChordOffsetsAndLengths) {
+  const Win at_node = crossing(0), offset = crossing(0.3 * L);
+  Win squeezed = crossing(0.3 * L);
+  for (int k = 0; k < 3; ++k) squeezed.xw[3 * k] = 0;  // a warp of no length: no chord
+  lanes::ClosestBatch b;
+  set_lane(b, 0, at_node, 1);
+  set_lane(b, 1, offset, -1);
+  set_lane(b, 2, squeezed, 1);
+  set_lane(b, 3, offset, 1);
+  lanes::closest4(b);
+  const double tol = 1e-12;
+  for (int l : {0, 1, 3}) {
+    SCOPED_TRACE(l);
+    const double side = l == 1 ? -1 : 1;
+    EXPECT_NEAR(b.n[0][l], 0, tol);
+    EXPECT_NEAR(b.n[1][l], 0, tol);
+    EXPECT_NEAR(b.n[2][l], side, tol);
+    EXPECT_NEAR(b.dlen[l], h, tol * L);
+    EXPECT_NEAR(b.ud[2][l], 1, tol);
+    EXPECT_NEAR(b.offw[l], l == 0 ? 0 : 0.3, tol);
+    EXPECT_NEAR(b.offf[l], 0, tol);
+    EXPECT_NEAR(b.tw[0][l], 1, tol);
+    EXPECT_NEAR(b.tf[1][l], 1, tol);
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_NEAR(b.lw[k][l], L, tol * L);
+      EXPECT_NEAR(b.lf[k][l], L, tol * L);
+    }
+  }
+  // No warp chord: offset 0 along it and no tangent; the segments are of zero length and
+  // parallel to nothing, so the normal falls back to -z for side +1.
+  EXPECT_EQ(b.offw[2], 0);
+  for (int m = 0; m < 3; ++m) EXPECT_EQ(b.tw[m][2], 0);
+  EXPECT_EQ(b.lw[0][2], 0);
+  EXPECT_EQ(b.n[2][2], -1);
 }
 
 // Parallel yarns (the closest-point system is singular): finite, |d| = h. A NaN window in
