@@ -230,10 +230,13 @@ class SolverT final : public Solver {
         nb[model_.elem_b[e1]].push_back({int(s), Real(0.5)});
         continue;
       }
-      nb[model_.elem_a[e1]].push_back({int(s), Real(-0.5)});
-      nb[model_.elem_b[e1]].push_back({int(s), Real(-0.5)});
-      nb[model_.elem_a[e2]].push_back({int(s), Real(0.5)});
-      nb[model_.elem_b[e2]].push_back({int(s), Real(0.5)});
+      // Adjoining elements share a node, which gets -F/2 and +F/2 of the same spring: no
+      // force, and no entry (adding and taking away the same half would only round).
+      const int ends[4] = {model_.elem_a[e1], model_.elem_b[e1], model_.elem_a[e2], model_.elem_b[e2]};
+      for (int k = 0; k < 4; ++k) {
+        const bool shared = (k < 2 ? (ends[k] == ends[2] || ends[k] == ends[3]) : (ends[k] == ends[0] || ends[k] == ends[1]));
+        if (!shared) nb[ends[k]].push_back({int(s), Real(k < 2 ? -0.5 : 0.5)});
+      }
     }
     inc_e_off_.assign(n + 1, 0);
     inc_b_off_.assign(n + 1, 0);
@@ -878,13 +881,13 @@ class SolverT final : public Solver {
   bool gather(const CrossingImpulse& r, int lo, int hi, int what) {
     if (!r.any_held && (what & kSums) && lo == 0 && hi == model_.node_count) {
       // The common case, one thread and no held node: every weight goes to the sums.
-      auto each = [](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum) {
+      auto each = [](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
         for (int k = 0; k < count; ++k)
           if (nodes[k] >= 0 && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
       };
-      if (r.has_n) each(6, r.node, r.w, r.P, sum_n_);
-      if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_);
-      if (r.has_s) each(6, r.node, r.w, r.S, sum_s_);
+      if (r.has_n) each(6, r.node, r.w, r.P, sum_n_.data());
+      if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_.data());
+      if (r.has_s) each(6, r.node, r.w, r.S, sum_s_.data());
       return false;
     }
     bool held = false;
