@@ -21,6 +21,7 @@ using v4 = __m256d;  // GCC vector of four doubles: + - * / and comparisons work
 using m4 = __attribute__((vector_size(32))) long long;
 
 #define RAVEL_AVX2 __attribute__((target("avx2"), always_inline)) inline
+#define RAVEL_AVX2_LAMBDA __attribute__((target("avx2"), always_inline))
 
 RAVEL_AVX2 v4 load(const double* p) {
   v4 v;
@@ -68,6 +69,19 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
       xw[k][m] = _mm256_set_pd(s.xw[3][i], s.xw[2][i], s.xw[1][i], s.xw[0][i]);
       xf[k][m] = _mm256_set_pd(s.xf[3][i], s.xf[2][i], s.xf[1][i], s.xf[0][i]);
     }
+  // SolverT::track's test: is any other node pair of the window closer than the middle one?
+  {
+    auto d2 = [&](int iw, int jf) RAVEL_AVX2_LAMBDA {
+      const v4 dx = xf[jf][0] - xw[iw][0], dy = xf[jf][1] - xw[iw][1], dz = xf[jf][2] - xw[iw][2];
+      return dot(dx, dy, dz, dx, dy, dz);
+    };
+    const v4 mid = d2(1, 1);
+    m4 moved = {0, 0, 0, 0};
+    for (int iw = 0; iw < 3; ++iw)
+      for (int jf = 0; jf < 3; ++jf)
+        if (iw != 1 || jf != 1) moved |= d2(iw, jf) < mid;
+    std::memcpy(s.moved, &moved, sizeof moved);
+  }
   // The segments next to the tracked node: start point, direction, squared length.
   v4 d1[2][3], d2[2][3], aa[2], ee[2];
   for (int k = 0; k < 2; ++k) {

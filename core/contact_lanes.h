@@ -37,6 +37,10 @@ struct ClosestBatch {
   double n[3][kWidth], dlen[kWidth], ud[3][kWidth];
   double offw[kWidth], offf[kWidth], tw[3][kWidth], tf[3][kWidth];
   double lw[2][kWidth], lf[2][kWidth];
+  // Out: whether a pair of the window's nodes other than the middle one is strictly closer
+  // than the middle pair (SolverT::track would move the tracked pair; all else above then
+  // belongs to a pair that is not the nearest and is recomputed by the solver).
+  long long moved[kWidth];
 };
 
 // Whether this processor runs the lane code (AVX2); checked once.

@@ -577,10 +577,10 @@ class SolverT final : public Solver {
   // edge of the window is searched once more; moving again means the yarns slid more than
   // one node in one step, which the method assumes never happens: reported, not hidden.
   // Returns true in that case; `w` is left loaded around the tracked pair.
-  bool track(int c, Window& w) {
+  bool track(int c, Window& w, bool loaded = false) {
     const Crossing& cr = model_.crossings[c];
     bool skipped = false;
-    load_window(cr, cr_kw_[c], cr_kf_[c], w);
+    if (!loaded) load_window(cr, cr_kw_[c], cr_kf_[c], w);
     for (int round = 0; round < 4; ++round) {
       int bw = 1, bf = 1;
       Real best = (w.xf[1] - w.xw[1]).squaredNorm();
@@ -628,12 +628,14 @@ class SolverT final : public Solver {
     Real wf[3];  // weights on weft nodes kf-1, kf, kf+1
     int lane;    // computed in this lane of the batch's lanes::ClosestBatch, which then has the
                  // rest of the window's geometry too; -1: computed alone
+    bool moved;  // (lanes) another node pair of the window is nearer than the tracked one
   };
 
   ContactGeom closest(const Crossing& cr, const Window& w) const {
     ContactGeom g{};
     g.d.setZero();
     g.lane = -1;
+    g.moved = false;
     const int kw = w.kw, kf = w.kf;
     // The up to 2 segments of each yarn next to the tracked node: start point, direction,
     // squared length (done once, each segment serves two pairs).
@@ -975,14 +977,29 @@ class SolverT final : public Solver {
     Window w[kBatch];
     ContactGeom g[kBatch];
     bool on[kBatch];
+    bool tracked[kBatch];
     for (int c = c0; c < c1; ++c) {
-      CrossingImpulse& r = out[c - c0];
+      const int k = c - c0;
+      CrossingImpulse& r = out[k];
       r.has_n = r.has_f = r.has_s = r.hold = r.any_held = false;
-      on[c - c0] = cr_active_[c];
-      if (on[c - c0] && track(c, w[c - c0])) cr_event_[c] |= ev_skip;
+      on[k] = cr_active_[c];
+      tracked[k] = false;
+      if (!on[k]) continue;
+      load_window(model_.crossings[c], cr_kw_[c], cr_kf_[c], w[k]);
+      // Windows the lanes take are searched there (and here again only if the pair moves).
+      if (lane_window(w[k])) continue;
+      if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+      tracked[k] = true;
     }
     lanes::ClosestBatch lb;
     closest_batch(c0, c1, on, w, g, lb);
+    for (int c = c0; c < c1; ++c) {
+      const int k = c - c0;
+      if (!on[k] || tracked[k] || !g[k].moved) continue;
+      // The nearest pair moved: the one-crossing search from here, then its closest points.
+      if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+      g[k] = closest(model_.crossings[c], w[k]);
+    }
     // The rest of each crossing, in three stages over the batch: each stage is a chain of
     // square roots and divisions, and four independent chains side by side keep the
     // processor busy where one crossing at a time would wait on each (same operations).
@@ -996,12 +1013,15 @@ class SolverT final : public Solver {
       if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
   }
 
+  // Whether the lanes take a window: all four segments next to the tracked pair intact.
+  bool lane_window(const Window& w) const {
+    return lanes_on() && w.wseg[0] && w.wseg[1] && w.fseg[0] && w.fseg[1];
+  }
   // The closest points of the crossings c in [c0, c1) with on[c - c0] set, from their loaded
-  // windows: those whose four segments are intact together in lanes (when on and the
-  // processor has them; the same numbers bit for bit), the others one at a time.
+  // windows: the lane windows together in lanes (when on and the processor has them; the
+  // same numbers bit for bit), the others one at a time.
   void closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g, lanes::ClosestBatch& lb) const {
     int lane[kBatch];
-    const bool use_lanes = lanes_on();
     int nl = 0;
     for (int c = c0; c < c1; ++c) {
       const int k = c - c0;
@@ -1009,7 +1029,7 @@ class SolverT final : public Solver {
       if (!on[k]) continue;
       const Crossing& cr = model_.crossings[c];
       if constexpr (std::is_same_v<Real, double>) {
-        if (use_lanes && w[k].wseg[0] && w[k].wseg[1] && w[k].fseg[0] && w[k].fseg[1]) {
+        if (lane_window(w[k])) {
           lb.xw[nl] = w[k].xw[0].data();  // V3 xw[3]: 9 consecutive doubles
           lb.xf[nl] = w[k].xf[0].data();
           lb.band[nl] = double(Real(kTieBand) * Real(cr.contact_distance));
@@ -1038,6 +1058,7 @@ class SolverT final : public Solver {
         q.dist = Real(lb.dist[l]);
         for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
         q.lane = l;
+        q.moved = lb.moved[l] != 0;
       }
     }
   }
