@@ -51,8 +51,8 @@ RAVEL_AVX2 void chord4(const v4 (*xs)[3], const v4* p, double* off, double (*tan
   const v4 T[3] = {xs[2][0] - xs[0][0], xs[2][1] - xs[0][1], xs[2][2] - xs[0][2]};
   const v4 T2 = dot(T[0], T[1], T[2], T[0], T[1], T[2]);
   const m4 none = T2 <= zero;
-  const v4 r = _mm256_sqrt_pd(T2);
-  for (int m = 0; m < 3; ++m) store(tangent[m], none ? zero : T[m] / r);
+  const v4 r = one / _mm256_sqrt_pd(T2);
+  for (int m = 0; m < 3; ++m) store(tangent[m], none ? zero : T[m] * r);
   const v4 q[3] = {p[0] - xs[1][0], p[1] - xs[1][1], p[2] - xs[1][2]};
   const v4 o = (dot(q[0], q[1], q[2], T[0], T[1], T[2]) / T2) * splat(2);
   store(off, none ? zero : (o < lo ? lo : (one < o ? one : o)));
@@ -106,7 +106,8 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
       v4 sa = denom > splat(1e-12) * A * E ? clamp01((B * F - C * E) / denom) : zero;
       v4 tb = (B * sa + F) / E;
       const m4 below = tb < zero, above = ~below & (tb > one);
-      sa = below ? clamp01(-C / A) : (above ? clamp01((B - C) / A) : sa);
+      const v4 end = clamp01((below ? -C : B - C) / A);  // one division for either end
+      sa = (below | above) ? end : sa;
       tb = below ? zero : (above ? one : tb);
       for (int m = 0; m < 3; ++m) cd[q][m] = (q0[m] + tb * d2[j][m]) - (p0[m] + sa * d1[i][m]);
       ca[q] = sa;
@@ -115,7 +116,7 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
       best2 = c2[q] < best2 ? c2[q] : best2;  // std::min(best2, c2)
     }
   // The tie band: pairs within `band` of the closest share the contact.
-  const v4 best = _mm256_sqrt_pd(best2), band = load(s.band);
+  const v4 best = _mm256_sqrt_pd(best2), band = load(s.band), inv_band = one / band;
   const v4 reach2 = (best + band) * (best + band);
   v4 wsum = zero, gd[3] = {zero, zero, zero}, ww[3] = {zero, zero, zero}, wf[3] = {zero, zero, zero};
   v4 ga = zero, gb = zero;
@@ -128,7 +129,7 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
     ga = is_first ? ca[q] : ga;
     gb = is_first ? cb[q] : gb;
     first &= ~is_first;
-    const v4 wq = one - (_mm256_sqrt_pd(c2[q]) - best) / band;
+    const v4 wq = one - (_mm256_sqrt_pd(c2[q]) - best) * inv_band;
     const m4 keep = ~(c2[q] >= reach2) & ~(wq <= zero);
     wsum = keep ? wsum + wq : wsum;
     for (int m = 0; m < 3; ++m) gd[m] = keep ? gd[m] + wq * cd[q][m] : gd[m];
@@ -163,7 +164,8 @@ __attribute__((target("avx2"))) void closest4(ClosestBatch& s) {
   // |d| and d / |d|.
   const v4 dlen = _mm256_sqrt_pd(dot(d[0], d[1], d[2], d[0], d[1], d[2]));
   store(s.dlen, dlen);
-  for (int m = 0; m < 3; ++m) store(s.ud[m], d[m] / dlen);
+  const v4 inv_dlen = one / dlen;
+  for (int m = 0; m < 3; ++m) store(s.ud[m], d[m] * inv_dlen);
   // SolverT::friction_setup: the contact points (pa on the warp from the weights
   // -(-ww), pb on the weft), then SolverT::chord_coord of each on the other yarn's chord
   // through its tracked node (both neighbours present: span 2, offsets clamped to [-1, 1]).

@@ -699,7 +699,7 @@ class SolverT final : public Solver {
     // linearly from 1 (closest) to 0 (band edge): the contact point moves continuously
     // when two pairs swap places.
     const Real best = std::sqrt(best2);
-    const Real band = Real(kTieBand) * Real(cr.contact_distance);
+    const Real band = Real(kTieBand) * Real(cr.contact_distance), inv_band = Real(1) / band;
     const Real reach2 = (best + band) * (best + band);
     Real wsum = 0;
     bool first = true;
@@ -710,7 +710,7 @@ class SolverT final : public Solver {
         first = false;
       }
       if (q.dist2 >= reach2) continue;
-      const Real wq = Real(1) - (std::sqrt(q.dist2) - best) / band;
+      const Real wq = Real(1) - (std::sqrt(q.dist2) - best) * inv_band;
       if (wq <= Real(0)) continue;
       wsum += wq;
       g.d += wq * q.d;
@@ -774,7 +774,7 @@ class SolverT final : public Solver {
       tangent.setZero();
       return k;
     }
-    tangent = T / std::sqrt(T2);
+    tangent = T * (Real(1) / std::sqrt(T2));
     const double off = double((p - xs[1]).dot(T) / T2) * double(span);
     const double lo = (k == 0 && ax >= 0) ? 0.0 : double(km - k);
     return k + std::clamp(off, lo, double(kp - k));
@@ -1102,7 +1102,9 @@ class SolverT final : public Solver {
       dlen = g.d.norm();
     }
     // d / |d| ((-d) / |d| is its negative exactly).
-    auto unit_d = [&] { return l >= 0 ? V3(Real(lb.ud[0][l]), Real(lb.ud[1][l]), Real(lb.ud[2][l])) : V3(g.d / dlen); };
+    auto unit_d = [&] {
+      return l >= 0 ? V3(Real(lb.ud[0][l]), Real(lb.ud[1][l]), Real(lb.ud[2][l])) : V3(g.d * (Real(1) / dlen));
+    };
     const Real D = Real(cr.contact_distance);
     Real delta;
     V3 u;
