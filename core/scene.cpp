@@ -340,8 +340,8 @@ std::vector<KeyDef> make_defs() {
       1e5, solver.end_time_s);
   INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
   BOOL("solver.simd",
-       "true: the yarn contact's closest points are computed four crossings at a time in AVX2 lanes where the "
-       "processor has them (double precision; the same numbers bit for bit); false: one crossing at a time",
+       "true: the yarn contact's geometry and the Zener elements are computed four at a time in AVX2 lanes where "
+       "the processor has them (double precision; the same numbers bit for bit); false: one at a time",
        solver.simd);
   NUM("solver.max_balance_error", "",
       "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true,

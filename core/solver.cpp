@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "contact_lanes.h"
+#include "element_lanes.h"
 #include "geometry.h"
 #include "material.h"
 
@@ -248,6 +249,52 @@ class SolverT final : public Solver {
     }
   }
 
+  // One element's strain, stress update, failure and force (the one-element code the lanes mirror).
+  void element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
+                   double& released, double& max_strain) {
+    if (broken_flag_[e]) {
+      elem_force_[e].setZero();
+      return;
+    }
+    const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
+    const Real len = dx.norm();
+    const double rest = model_.elem_rest[e];
+    const Real eps = len / Real(rest) - Real(1);
+    const double vol = model_.elem_area[e] * rest;
+    double sig, u, dd = 0;
+    if (zener) {
+      const ZenerStep zs = zener_.step(double(prev_strain_[e]), double(eps), double(ev_[e]));
+      ev_[e] = Real(zs.ev);
+      sig = zs.stress;
+      u = zener_stored(zener_.c, sig, zs.ev) * vol;
+      dd = zs.dissipated * vol;
+    } else {
+      sig = eps > 0 ? E * double(eps) : 0.0;
+      u = sig * sig / (2 * E) * vol;
+    }
+    prev_strain_[e] = eps;
+    strain_[e] = eps;
+    diss += dd;
+    if (breakable && double(eps) >= fail) {
+      // Failure: the element is removed for good, its energy is released (SPEC §1). It
+      // last pushed on its nodes at t - dt, over the half steps around t - dt: the energy
+      // it took from them is its energy at mid-step, the mean of t - dt and t. Booking
+      // the energy at t instead created f v dt / 2 per break (2 % of the impact energy
+      // in a near-limit run with 240 breaks).
+      broken_flag_[e] = 1;
+      released += 0.5 * (elem_energy_[e] + u);
+      stress_[e] = 0;
+      elem_force_[e].setZero();
+      return;
+    }
+    elem_energy_[e] = u;
+    stored += u;
+    stress_[e] = Real(sig);
+    max_strain = std::max(max_strain, double(eps));
+    // Force on node b: -sigma A along the element (pulls b towards a).
+    elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig * model_.elem_area[e] / double(len))) : V3::Zero();
+  }
+
   // ---------------------------------------------------------------- stages
   // Element strain from positions, constitutive update, failure, element force vectors,
   // bending springs, then gather into nodal forces.
@@ -259,50 +306,45 @@ class SolverT final : public Solver {
     const bool breakable = model_.breakable;
     double stored = 0, diss = 0, released = 0, max_strain = 0;
     int newly_broken[2] = {0, 0};
+    // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
+    // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
+    // taken in element order either way.
+    const bool use_lanes = zener && lanes_on();
+    const int ng = (ne + kBatch - 1) / kBatch;
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released) \
     reduction(max : max_strain) if (threads_ > 1)
-    for (int e = 0; e < ne; ++e) {
-      if (broken_flag_[e]) {
-        elem_force_[e].setZero();
-        continue;
+    for (int grp = 0; grp < ng; ++grp) {
+      const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
+      if constexpr (std::is_same_v<Real, double>) {
+        if (use_lanes && e1 - e0 == kBatch && !(broken_flag_[e0] | broken_flag_[e0 + 1] | broken_flag_[e0 + 2] | broken_flag_[e0 + 3])) {
+          lanes::ElementBatch b;
+          b.x = x_[0].data();
+          b.a = &model_.elem_a[e0];
+          b.b = &model_.elem_b[e0];
+          b.rest = &model_.elem_rest[e0];
+          b.area = &model_.elem_area[e0];
+          b.k1 = zener_.c.k1, b.k2 = zener_.c.k2, b.mu = zener_.c.mu;
+          b.dt = zener_.dt, b.inv_dt = zener_.inv_dt, b.lam = zener_.lam, b.g = zener_.g;
+          b.decay = zener_.decay, b.slack_decay = zener_.slack_decay;
+          b.fail = fail;
+          b.breakable = breakable;
+          b.prev_strain = &prev_strain_[e0];
+          b.ev = &ev_[e0];
+          b.strain = &strain_[e0];
+          b.stress = &stress_[e0];
+          b.energy = &elem_energy_[e0];
+          b.force = elem_force_[e0].data();
+          if (lanes::zener4(b)) {
+            for (int l = 0; l < kBatch; ++l) {
+              diss += b.dd[l];
+              stored += b.u[l];
+              max_strain = std::max(max_strain, b.eps[l]);
+            }
+            continue;
+          }
+        }
       }
-      const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
-      const Real len = dx.norm();
-      const double rest = model_.elem_rest[e];
-      const Real eps = len / Real(rest) - Real(1);
-      const double vol = model_.elem_area[e] * rest;
-      double sig, u, dd = 0;
-      if (zener) {
-        const ZenerStep zs = zener_.step(double(prev_strain_[e]), double(eps), double(ev_[e]));
-        ev_[e] = Real(zs.ev);
-        sig = zs.stress;
-        u = zener_stored(zener_.c, sig, zs.ev) * vol;
-        dd = zs.dissipated * vol;
-      } else {
-        sig = eps > 0 ? E * double(eps) : 0.0;
-        u = sig * sig / (2 * E) * vol;
-      }
-      prev_strain_[e] = eps;
-      strain_[e] = eps;
-      diss += dd;
-      if (breakable && double(eps) >= fail) {
-        // Failure: the element is removed for good, its energy is released (SPEC §1). It
-        // last pushed on its nodes at t - dt, over the half steps around t - dt: the energy
-        // it took from them is its energy at mid-step, the mean of t - dt and t. Booking
-        // the energy at t instead created f v dt / 2 per break (2 % of the impact energy
-        // in a near-limit run with 240 breaks).
-        broken_flag_[e] = 1;
-        released += 0.5 * (elem_energy_[e] + u);
-        stress_[e] = 0;
-        elem_force_[e].setZero();
-        continue;
-      }
-      elem_energy_[e] = u;
-      stored += u;
-      stress_[e] = Real(sig);
-      max_strain = std::max(max_strain, double(eps));
-      // Force on node b: -sigma A along the element (pulls b towards a).
-      elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig * model_.elem_area[e] / double(len))) : V3::Zero();
+      for (int e = e0; e < e1; ++e) element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain);
     }
     for (int e = 0; e < ne; ++e) {
       // Count failures serially (cheap) to keep the count per family.

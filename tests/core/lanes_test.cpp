@@ -7,6 +7,8 @@
 #include <limits>
 
 #include "contact_lanes.h"
+#include "element_lanes.h"
+#include "material.h"
 #include "fixture.h"
 #include "solver.h"
 
@@ -153,6 +155,62 @@ TEST_F(Lanes, ParallelSegmentsAndNaNStayInTheirLane) {
     EXPECT_EQ(mixed.a[l], alone.a[l]);
     EXPECT_EQ(mixed.b[l], alone.b[l]);
   }
+}
+
+// Four elements along x, stretched by 0 (slack after compression), 1 %, 3 % and 5 % from
+// rest, with different viscous strains: the lanes give ZenerStepper::step's numbers bit for
+// bit, and a lane past the failure strain sends the group back untouched.
+TEST_F(Lanes, ElementsFollowTheZenerStepExactly) {
+  const ZenerConstants c{7.28e10, 4.17e11, 6.26e8};
+  const ZenerStepper z(c, 6.1e-8);
+  const double rest = 0.867e-3, area = 7.64e-8;
+  const double stretch[4] = {-0.002, 0.01, 0.03, 0.05}, ev0[4] = {1e-4, 0, 2e-3, 1e-2};
+  std::vector<double> x;
+  int a[4], b[4];
+  double rests[4], areas[4];
+  for (int l = 0; l < 4; ++l) {
+    a[l] = 2 * l, b[l] = 2 * l + 1;
+    rests[l] = rest, areas[l] = area;
+    for (double v : {0.0, double(l), 0.0, rest * (1 + stretch[l]), double(l), 0.0}) x.push_back(v);
+  }
+  auto batch = [&](double fail, double* prev, double* ev, double* strain, double* stress, double* energy,
+                   double* force) {
+    lanes::ElementBatch e;
+    e.x = x.data();
+    e.a = a, e.b = b, e.rest = rests, e.area = areas;
+    e.k1 = c.k1, e.k2 = c.k2, e.mu = c.mu, e.dt = z.dt, e.inv_dt = z.inv_dt, e.lam = z.lam, e.g = z.g;
+    e.decay = z.decay, e.slack_decay = z.slack_decay;
+    e.fail = fail;
+    e.breakable = true;
+    e.prev_strain = prev, e.ev = ev, e.strain = strain, e.stress = stress, e.energy = energy, e.force = force;
+    return e;
+  };
+  const double prev0[4] = {0, 0.009, 0.029, 0.049};
+  double prev[4], ev[4], strain[4] = {}, stress[4] = {}, energy[4] = {}, force[12] = {};
+  for (int l = 0; l < 4; ++l) ev[l] = ev0[l], prev[l] = prev0[l];
+  lanes::ElementBatch e = batch(0.052, prev, ev, strain, stress, energy, force);
+  ASSERT_TRUE(lanes::zener4(e));
+  for (int l = 0; l < 4; ++l) {
+    SCOPED_TRACE(l);
+    const double len = rest * (1 + stretch[l]);
+    const double eps = len / rest - 1;
+    const ZenerStep zs = z.step(prev0[l], eps, ev0[l]);
+    EXPECT_EQ(strain[l], eps);
+    EXPECT_EQ(ev[l], zs.ev);
+    EXPECT_EQ(stress[l], zs.stress);
+    EXPECT_EQ(energy[l], zener_stored(c, zs.stress, zs.ev) * (area * rest));
+    EXPECT_EQ(e.dd[l], zs.dissipated * (area * rest));
+    EXPECT_EQ(force[3 * l], len * (-zs.stress * area / len));
+    EXPECT_EQ(force[3 * l + 1], 0);
+  }
+  EXPECT_EQ(stress[0], 0) << "compressed: slack";
+  EXPECT_GT(stress[3], stress[2]);
+  // 5 % with a 4 % failure strain: nothing written.
+  double prev2[4] = {0, 0, 0, 0}, ev2[4] = {0, 0, 0, 0}, strain2[4] = {9, 9, 9, 9}, stress2[4] = {}, energy2[4] = {},
+         force2[12] = {};
+  lanes::ElementBatch f = batch(0.04, prev2, ev2, strain2, stress2, energy2, force2);
+  EXPECT_FALSE(lanes::zener4(f));
+  for (int l = 0; l < 4; ++l) EXPECT_EQ(strain2[l], 9);
 }
 
 // A whole impact (breaks, ravelled and released crossings, windows at yarn ends that the

@@ -1,0 +1,38 @@
+// The yarn elements' strain, Zener stress update and force (Eq 3, 23; docs/MODEL.md §2) for
+// four elements at once, in the AVX2 lanes of processors that have them.
+//
+// As in contact_lanes.h, the lane code performs lane by lane exactly the IEEE operations of
+// the one-element code in solver.cpp (SolverT::internal_forces with ZenerStepper::step), in
+// the same order, without floating-point contraction: the results are the same bit for bit
+// (tested). It covers the regular case, four intact elements of which none fails in this
+// step; the solver does the others one at a time.
+#pragma once
+
+#include "contact_lanes.h"
+
+namespace ravel::lanes {
+
+struct ElementBatch {
+  // In: node positions (x y z per node), the four elements' end nodes, rest lengths and
+  // cross-sections; the Zener stepper's constants (ZenerStepper); the failure strain.
+  const double* x;
+  const int *a, *b;             // at element e0 of the model's arrays, as the next four
+  const double *rest, *area;
+  double k1, k2, mu, dt, inv_dt, lam, g, decay, slack_decay;
+  double fail;
+  bool breakable;
+  // In/out, per element (pointers to element e0 of the solver's arrays): last step's strain
+  // (becomes this step's), the viscous strain; out: strain, stress, stored energy and the
+  // force on node b (x y z per element).
+  double *prev_strain, *ev, *strain, *stress, *energy, *force;
+  // Out, per lane, for the solver's sums (taken in element order): stored energy, energy
+  // dissipated by the dashpot over the step, strain.
+  double u[kWidth], dd[kWidth], eps[kWidth];
+};
+
+// Updates the four elements and returns true, or returns false without writing anything
+// when one of them reaches the failure strain (the solver then does them one at a time).
+// Only call when available().
+bool zener4(ElementBatch& s);
+
+}  // namespace ravel::lanes
