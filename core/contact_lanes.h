@@ -43,10 +43,25 @@ struct ClosestBatch {
   long long moved[kWidth];
 };
 
-// Whether this processor runs the lane code (AVX2); checked once.
+// The instruction set the lane kernels run with on this processor, chosen once: AVX-512
+// (F, VL, DQ) if it has it, else AVX2, else none. The environment variable RAVEL_LANES=avx2
+// caps the choice at AVX2. Both give the same numbers bit for bit.
+enum class Isa { none, avx2, avx512 };
+Isa isa();
+const char* isa_name(Isa i);
+// Whether this processor runs the lane code at all.
 bool available();
 
 // Fills the outputs of all four lanes. Only call when available().
 void closest4(ClosestBatch& s);
+
+// The kernels of each instruction set, for tests that compare them (call only what the
+// processor has).
+namespace avx2 {
+void closest4(ClosestBatch& s);
+}
+namespace avx512 {
+void closest4(ClosestBatch& s);
+}
 
 }  // namespace ravel::lanes

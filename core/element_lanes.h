@@ -35,4 +35,11 @@ struct ElementBatch {
 // Only call when available().
 bool zener4(ElementBatch& s);
 
+namespace avx2 {
+bool zener4(ElementBatch& s);
+}
+namespace avx512 {
+bool zener4(ElementBatch& s);
+}
+
 }  // namespace ravel::lanes

@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "contact_lanes.h"
@@ -45,6 +49,7 @@ class Lanes : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!lanes::available()) GTEST_SKIP() << "this processor has no AVX2: the solver computes one crossing at a time";
+    std::printf("lane kernels: %s\n", lanes::isa_name(lanes::isa()));
   }
 };
 
@@ -211,6 +216,71 @@ TEST_F(Lanes, ElementsFollowTheZenerStepExactly) {
   lanes::ElementBatch f = batch(0.04, prev2, ev2, strain2, stress2, energy2, force2);
   EXPECT_FALSE(lanes::zener4(f));
   for (int l = 0; l < 4; ++l) EXPECT_EQ(strain2[l], 9);
+}
+
+// The AVX-512 build of the kernels gives the AVX2 build's numbers bit for bit, over many
+// perturbed windows (tilted, sheared, near-parallel, stretched) and element states.
+TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
+  if (lanes::isa() != lanes::Isa::avx512) GTEST_SKIP() << "this processor has no AVX-512 (F, VL, DQ)";
+  std::uint64_t seed = 12345;
+  auto rnd = [&] {  // uniform in [-1, 1)
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return double(seed >> 11) / double(1ull << 52) - 1.0;
+  };
+  int moved = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    Win w[4];
+    for (int l = 0; l < 4; ++l) {
+      w[l] = crossing(rnd() * 0.6 * L, trial % 7 == 0);
+      for (int i = 0; i < 9; ++i) w[l].xw[i] += rnd() * 0.3 * L, w[l].xf[i] += rnd() * 0.3 * L;
+    }
+    lanes::ClosestBatch p, q;
+    for (int l = 0; l < 4; ++l) set_lane(p, l, w[l], l % 2 ? 1 : -1), set_lane(q, l, w[l], l % 2 ? 1 : -1);
+    lanes::avx2::closest4(p);
+    lanes::avx512::closest4(q);
+    // Every output field, compared as bytes (the inputs are the same pointers).
+    const size_t from = offsetof(lanes::ClosestBatch, d);
+    ASSERT_EQ(std::memcmp(reinterpret_cast<const char*>(&p) + from, reinterpret_cast<const char*>(&q) + from,
+                          sizeof p - from),
+              0)
+        << "trial " << trial;
+    for (int l = 0; l < 4; ++l) moved += p.moved[l] != 0;
+  }
+  EXPECT_GT(moved, 0) << "some windows should have a nearer pair than the middle one";
+  // Elements: random strains around the failure strain's neighbourhood, slack ones too.
+  const ZenerConstants c{7.28e10, 4.17e11, 6.26e8};
+  const ZenerStepper z(c, 6.1e-8);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<double> x;
+    int a[4], b[4];
+    double rests[4], areas[4], prev[2][4], ev[2][4], strain[2][4], stress[2][4], energy[2][4], force[2][12];
+    for (int l = 0; l < 4; ++l) {
+      a[l] = 2 * l, b[l] = 2 * l + 1;
+      rests[l] = 0.867e-3, areas[l] = 7.64e-8;
+      const double len = rests[l] * (1 + 0.03 * rnd());
+      for (double v : {0.0, 0.0, 0.0, len * 0.6, len * 0.8 * rnd(), 0.0}) x.push_back(v);
+      x.back() = std::sqrt(std::max(0.0, len * len - x[6 * l + 3] * x[6 * l + 3] - x[6 * l + 4] * x[6 * l + 4]));
+      for (int k = 0; k < 2; ++k) prev[k][l] = 0.03 * rnd(), ev[k][l] = 0.01 * rnd();
+      prev[1][l] = prev[0][l], ev[1][l] = ev[0][l];
+    }
+    lanes::ElementBatch e[2];
+    for (int k = 0; k < 2; ++k) {
+      e[k].x = x.data();
+      e[k].a = a, e[k].b = b, e[k].rest = rests, e[k].area = areas;
+      e[k].k1 = c.k1, e[k].k2 = c.k2, e[k].mu = c.mu, e[k].dt = z.dt, e[k].inv_dt = z.inv_dt, e[k].lam = z.lam;
+      e[k].g = z.g, e[k].decay = z.decay, e[k].slack_decay = z.slack_decay;
+      e[k].fail = 0.052, e[k].breakable = true;
+      e[k].prev_strain = prev[k], e[k].ev = ev[k], e[k].strain = strain[k], e[k].stress = stress[k];
+      e[k].energy = energy[k], e[k].force = force[k];
+    }
+    ASSERT_TRUE(lanes::avx2::zener4(e[0]));
+    ASSERT_TRUE(lanes::avx512::zener4(e[1]));
+    EXPECT_EQ(std::memcmp(ev[0], ev[1], sizeof ev[0]), 0);
+    EXPECT_EQ(std::memcmp(stress[0], stress[1], sizeof stress[0]), 0);
+    EXPECT_EQ(std::memcmp(energy[0], energy[1], sizeof energy[0]), 0);
+    EXPECT_EQ(std::memcmp(force[0], force[1], sizeof force[0]), 0);
+    EXPECT_EQ(std::memcmp(e[0].dd, e[1].dd, sizeof e[0].dd), 0);
+  }
 }
 
 // A whole impact (breaks, ravelled and released crossings, windows at yarn ends that the
