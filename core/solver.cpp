@@ -481,9 +481,6 @@ class SolverT final : public Solver {
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) reduction(+ : w_shift) if (threads_ > 1)
     for (int i = 0; i < n; ++i) {
       v_prev_[i] = v_[i];
-      dv_contact_[i].setZero();
-      dv_friction_[i].setZero();
-      dv_pfriction_[i].setZero();
       // The second half of last step's shift work, with the force after the shift (see finish_step).
       w_shift += double(f_[i].dot(dx_contact_[i]));
       dx_contact_[i].setZero();
@@ -1334,6 +1331,7 @@ class SolverT final : public Solver {
       const double sd = model_.shape.sdf(rel, nrm);
       if (sd > 0) continue;
       ++touching;
+      ptouch_list_.push_back(i);
       if (model_.projectile_holds) {
         held_n_[i] = nrm;
         held_flag_[i] = 1;
@@ -1472,11 +1470,18 @@ class SolverT final : public Solver {
       const V3 vsum = v_prev_[i] + v_[i];
       w_contact += hm * double(dv_contact_[i].dot(vsum));
       w_friction += hm * double(dv_friction_[i].dot(vsum));
-      w_pfriction += hm * double(dv_pfriction_[i].dot(vsum));
+      dv_contact_[i].setZero();  // ready for the next step's corrections
+      dv_friction_[i].setZero();
       // A pure position shift changes the stored energy by -f . dx (to first order) with
       // no kinetic energy change: that energy is the shift's.
       w_shift += double(f_[i].dot(dx_contact_[i]));
     }
+    // The projectile's friction touched only the nodes on it (in node order).
+    for (int i : ptouch_list_) {
+      w_pfriction += 0.5 * model_.mass[i] * double(dv_pfriction_[i].dot(v_prev_[i] + v_[i]));
+      dv_pfriction_[i].setZero();
+    }
+    ptouch_list_.clear();
     // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
     for (const auto& [i, F] : f_ext_) external_cum_ += 0.5 * double(model_.dt) * double(F.dot(v_prev_[i] + v_[i]));
     contact_cum_ -= w_contact;
@@ -1512,6 +1517,7 @@ class SolverT final : public Solver {
   // impulse the yarn contact passed through them to the projectile, and their list.
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
+  std::vector<int> ptouch_list_;  // nodes the projectile touched this step (their dv_pfriction_)
   std::vector<std::uint8_t> held_flag_;    // held_n_ is nonzero (a compact test for the hot loops)
   std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections summed per node (gather, finish_pass)
   V3 proj_impulse_ = V3::Zero();           // the projectile contact's impulse on the projectile this step
