@@ -1284,15 +1284,23 @@ class SolverT final : public Solver {
       // K = alpha_f m / dt^2, m the effective mass of the relative motion: alpha_f = 1
       // returns the contact to its stuck point in exactly one step.
       const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
+      // arc_between(yarn, u0, u1, known), done here when both ends lie on one segment of known
+      // length (the usual stuck contact): (u1 - u0) times that length, as arc_between has it.
+      auto arc = [&](int yarn, double u0, double u1, const KnownLengths& known) {
+        const int a = floor_int(u0);
+        const unsigned i = unsigned(a - known.first);
+        if (i < 2 && a == floor_int(u1)) return double(Real(u1 - u0) * known.len[i]);
+        return double(arc_between(yarn, u0, u1, known));
+      };
       auto one_yarn = [&](int yarn, double cur, double& stick, double& force, const KnownLengths& known) {
-        const double slip = double(arc_between(yarn, stick, cur, known));  // Delta s of Eq 12
+        const double slip = arc(yarn, stick, cur, known);  // Delta s of Eq 12
         const double trial = K * slip;
         if (std::abs(trial) <= limit) {
           force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
         } else {
           force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
           const double new_stick = advance(yarn, cur, -force / K, known);
-          moved += std::abs(double(arc_between(yarn, stick, new_stick, known)));
+          moved += std::abs(arc(yarn, stick, new_stick, known));
           stick = new_stick;
           slid = true;
         }
