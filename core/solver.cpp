@@ -82,6 +82,7 @@ class SolverT final : public Solver {
     const int nc = int(model_.crossings.size());
     cr_kw_.resize(nc);
     cr_kf_.resize(nc);
+    cr_win_.assign(nc, WindowIds{});
     cr_stick_w_.assign(nc, -1.0);
     cr_stick_f_.assign(nc, -1.0);
     cr_active_.assign(nc, 1);
@@ -589,6 +590,48 @@ class SolverT final : public Solver {
     V3 xw[3], xf[3];
     bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
   };
+  // The window of crossing c around its tracked pair, from the crossing's cached node ids
+  // (rebuilt when the tracked pair has moved since): what load_window finds, without the
+  // yarn offsets and bounds.
+  struct WindowIds {
+    int kw = std::numeric_limits<int>::min(), kf = 0;  // the tracked pair these are for (none yet)
+    int node[6];                // warp kw-1..kw+1, weft kf-1..kf+1 (-1: past a yarn's end)
+    int wseg0, fseg0;           // element index of warp segment kw-1 and weft segment kf-1
+    std::uint8_t exists;        // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
+  };
+  void load_window(int c, Window& w) {
+    WindowIds& id = cr_win_[c];
+    if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) {
+      const Crossing& cr = model_.crossings[c];
+      const int kw = cr_kw_[c], kf = cr_kf_[c];
+      load_window(cr, kw, kf, w);
+      id.kw = kw;
+      id.kf = kf;
+      for (int k = 0; k < 3; ++k) id.node[k] = w.wnode[k], id.node[3 + k] = w.fnode[k];
+      id.wseg0 = model_.yarn_elem_offset[cr.warp_yarn] + kw - 1;
+      id.fseg0 = model_.yarn_elem_offset[cr.weft_yarn] + kf - 1;
+      const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+      id.exists = 0;
+      for (int k = 0; k < 2; ++k) {
+        const int sw = kw - 1 + k, sf = kf - 1 + k;
+        if (sw >= 0 && sw + 1 < nw) id.exists |= std::uint8_t(1 << k);
+        if (sf >= 0 && sf + 1 < nf) id.exists |= std::uint8_t(4 << k);
+      }
+      return;
+    }
+    w.kw = id.kw;
+    w.kf = id.kf;
+    for (int k = 0; k < 3; ++k) {
+      w.wnode[k] = id.node[k];
+      w.fnode[k] = id.node[3 + k];
+      if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
+      if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
+    }
+    for (int k = 0; k < 2; ++k) {
+      w.wseg[k] = (id.exists >> k & 1) && !broken_flag_[id.wseg0 + k];
+      w.fseg[k] = (id.exists >> (2 + k) & 1) && !broken_flag_[id.fseg0 + k];
+    }
+  }
   void load_window(const Crossing& cr, int kw, int kf, Window& w) const {
     w.kw = kw;
     w.kf = kf;
@@ -619,7 +662,7 @@ class SolverT final : public Solver {
   bool track(int c, Window& w, bool loaded = false) {
     const Crossing& cr = model_.crossings[c];
     bool skipped = false;
-    if (!loaded) load_window(cr, cr_kw_[c], cr_kf_[c], w);
+    if (!loaded) load_window(c, w);
     for (int round = 0; round < 4; ++round) {
       int bw = 1, bf = 1;
       Real best = (w.xf[1] - w.xw[1]).squaredNorm();
@@ -1024,7 +1067,7 @@ class SolverT final : public Solver {
       on[k] = cr_active_[c];
       tracked[k] = false;
       if (!on[k]) continue;
-      load_window(model_.crossings[c], cr_kw_[c], cr_kf_[c], w[k]);
+      load_window(c, w[k]);
       // Windows the lanes take are searched there (and here again only if the pair moves).
       if (lane_window(w[k])) continue;
       if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
@@ -1445,7 +1488,7 @@ class SolverT final : public Solver {
       bool on[kBatch];
       for (int c = c0; c < c1; ++c) {
         on[c - c0] = cr_active_[c];
-        if (on[c - c0]) load_window(model_.crossings[c], cr_kw_[c], cr_kf_[c], w[c - c0]);
+        if (on[c - c0]) load_window(c, w[c - c0]);
       }
       lanes::ClosestBatch lb;
       closest_batch(c0, c1, on, w, g, lb);
@@ -1536,6 +1579,7 @@ class SolverT final : public Solver {
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
+  std::vector<WindowIds> cr_win_;  // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
   std::vector<CrossingImpulse> impulses_;
