@@ -115,7 +115,7 @@ class SolverT final : public Solver {
 #endif
   }
   void set_simd(bool on) override {
-    simd_ = on;
+    simd_ = on && std::is_same_v<Real, double> && lanes::available();
   }
   bool simd_active() const override {
     return lanes_on();
@@ -1053,7 +1053,7 @@ class SolverT final : public Solver {
   // processor has them; the same numbers bit for bit), then the rest of each.
   static constexpr int kBatch = lanes::kWidth;
   bool lanes_on() const {
-    return std::is_same_v<Real, double> && simd_ && lanes::available();
+    return simd_;  // set_simd: asked for, double precision, and the processor has the lanes
   }
   void crossing_batch(int c0, int c1, Real alpha, bool last, CrossingImpulse* out) {
     Window w[kBatch];
@@ -1560,7 +1560,9 @@ class SolverT final : public Solver {
 
  private:
   int threads_ = 1;
-  bool simd_ = true;  // closest points in lanes where the processor has them (contact_lanes.h)
+  // Lanes in use (contact_lanes.h, element_lanes.h): asked for, double precision, and the
+  // processor has them.
+  bool simd_ = std::is_same_v<Real, double> && lanes::available();
   ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
   std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism
