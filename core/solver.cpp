@@ -901,9 +901,32 @@ class SolverT final : public Solver {
         // thread owns a range of nodes and applies, in crossing order, the changes that
         // fall in its range: race-free, and the same sums whatever the number of threads.
         const int nb = (nc + kBatch - 1) / kBatch;
+        rec_first_.resize(nc);
+        rec_last_.resize(nc);
 #pragma omp parallel for num_threads(threads_) schedule(static)
-        for (int b = 0; b < nb; ++b)
-          crossing_batch(b * kBatch, std::min(nc, (b + 1) * kBatch), alpha, last, &impulses_[b * kBatch]);
+        for (int b = 0; b < nb; ++b) {
+          const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
+          crossing_batch(c0, c1, alpha, last, &impulses_[c0]);
+          for (int c = c0; c < c1; ++c) {
+            // The lowest and highest node the record can touch.
+            const CrossingImpulse& r = impulses_[c];
+            int a = std::numeric_limits<int>::max(), z = -1;
+            auto take = [&](const int* nodes, int count) {
+              for (int k = 0; k < count; ++k)
+                if (nodes[k] >= 0) a = std::min(a, nodes[k]), z = std::max(z, nodes[k]);
+            };
+            if (r.has_n || r.has_s) take(r.node, 6);
+            if (r.has_f) take(r.fnode, 4);
+            rec_first_[c] = a;
+            rec_last_[c] = z;
+          }
+        }
+        // Running maximum of the highest node and running minimum (from the end) of the
+        // lowest: a node range [lo, hi) is touched only by records between the first
+        // crossing whose running maximum reaches lo and the last whose running minimum is
+        // below hi. With the node numbering of model.cpp that is about 1/T of them each.
+        for (int c = 1; c < nc; ++c) rec_last_[c] = std::max(rec_last_[c], rec_last_[c - 1]);
+        for (int c = nc - 2; c >= 0; --c) rec_first_[c] = std::min(rec_first_[c], rec_first_[c + 1]);
 #pragma omp parallel num_threads(threads_)
         {
 #ifdef _OPENMP
@@ -912,7 +935,9 @@ class SolverT final : public Solver {
           const int t = 0, T = 1;
 #endif
           const int lo = int(long(model_.node_count) * t / T), hi = int(long(model_.node_count) * (t + 1) / T);
-          for (int c = 0; c < nc; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
+          const int c_first = int(std::lower_bound(rec_last_.begin(), rec_last_.end(), lo) - rec_last_.begin());
+          const int c_end = int(std::lower_bound(rec_first_.begin(), rec_first_.end(), hi) - rec_first_.begin());
+          for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
           finish_pass(lo, hi);
         }
       } else {
@@ -963,11 +988,12 @@ class SolverT final : public Solver {
   // projectile. Returns whether the record touches a held node.
   static constexpr int kSums = 1, kHeld = 2;
   bool gather(const CrossingImpulse& r, int lo, int hi, int what) {
-    if (!r.any_held && (what & kSums) && lo == 0 && hi == model_.node_count) {
-      // The common case, one thread and no held node: every weight goes to the sums.
-      auto each = [](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
+    if (!r.any_held && (what & kSums)) {
+      // The common case, no held node: every weight on a node in [lo, hi) goes to the sums.
+      const unsigned span = unsigned(hi - lo);
+      auto each = [lo, span](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
         for (int k = 0; k < count; ++k)
-          if (nodes[k] >= 0 && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
+          if (unsigned(nodes[k] - lo) < span && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
       };
       if (r.has_n) each(6, r.node, r.w, r.P, sum_n_.data());
       if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_.data());
@@ -1581,6 +1607,7 @@ class SolverT final : public Solver {
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
+  std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
   std::vector<WindowIds> cr_win_;  // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
