@@ -251,11 +251,12 @@ class SolverT final : public Solver {
   }
 
   // One element's strain, stress update, failure and force (the one-element code the lanes mirror).
-  void element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
+  // Returns whether the element failed in this step.
+  bool element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
                    double& released, double& max_strain) {
     if (broken_flag_[e]) {
       elem_force_[e].setZero();
-      return;
+      return false;
     }
     const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
     const Real len = dx.norm();
@@ -286,7 +287,7 @@ class SolverT final : public Solver {
       released += 0.5 * (elem_energy_[e] + u);
       stress_[e] = 0;
       elem_force_[e].setZero();
-      return;
+      return true;
     }
     elem_energy_[e] = u;
     stored += u;
@@ -294,6 +295,7 @@ class SolverT final : public Solver {
     max_strain = std::max(max_strain, double(eps));
     // Force on node b: -sigma A along the element (pulls b towards a).
     elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig * model_.elem_area[e] / double(len))) : V3::Zero();
+    return false;
   }
 
   // ---------------------------------------------------------------- stages
@@ -306,13 +308,13 @@ class SolverT final : public Solver {
     const double fail = model_.failure_strain;
     const bool breakable = model_.breakable;
     double stored = 0, diss = 0, released = 0, max_strain = 0;
-    int newly_broken[2] = {0, 0};
+    int newly_broken[2] = {0, 0}, nbroke = 0;
     // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
     // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
     // taken in element order either way.
     const bool use_lanes = zener && lanes_on();
     const int ng = (ne + kBatch - 1) / kBatch;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released) \
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released, nbroke) \
     reduction(max : max_strain) if (threads_ > 1)
     for (int grp = 0; grp < ng; ++grp) {
       const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
@@ -345,10 +347,10 @@ class SolverT final : public Solver {
           }
         }
       }
-      for (int e = e0; e < e1; ++e) element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain);
+      for (int e = e0; e < e1; ++e) nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain);
     }
-    for (int e = 0; e < ne; ++e) {
-      // Count failures serially (cheap) to keep the count per family.
+    // Count failures serially to keep the count per family (only in a step with one).
+    for (int e = 0; e < ne && nbroke > 0; ++e) {
       if (broken_flag_[e] == 1) {
         broken_flag_[e] = 2;
         newly_broken[model_.yarn_family[model_.elem_yarn[e]]]++;
@@ -888,11 +890,9 @@ class SolverT final : public Solver {
   void yarn_contact() {
     const int nc = int(model_.crossings.size());
     const int N = model_.contact_iterations;
-    std::fill(cr_fn_step_.begin(), cr_fn_step_.end(), 0.0);
-    std::fill(cr_ft_.begin(), cr_ft_.end(), 0.0);
-    std::fill(cr_event_.begin(), cr_event_.end(), 0);
-    impulses_.resize(nc);
+    impulses_.resize(nc);  // (cr_fn_step_, cr_ft_ and cr_event_ are cleared by each crossing's first pass)
     for (int pass = 1; pass <= N; ++pass) {
+      first_pass_ = pass == 1;
       // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
       const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
       const bool last = pass == N;
@@ -956,8 +956,15 @@ class SolverT final : public Solver {
         finish_pass(0, model_.node_count);
       }
     }
-    // Book what broke the method's assumptions, in crossing order.
+    // Book what broke the method's assumptions, in crossing order; sum the normal forces and
+    // count sliding and stuck crossings.
+    double fsum = 0;
+    int sliding = 0, stuck = 0;
     for (int c = 0; c < nc; ++c) {
+      if (cr_active_[c]) {
+        fsum += cr_fn_[c];
+        if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
+      }
       const std::uint8_t ev = cr_event_[c];
       if (!ev) continue;
       const Crossing& cr = model_.crossings[c];
@@ -969,13 +976,6 @@ class SolverT final : public Solver {
       if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
       if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
       if (ev & ev_separated) ++diag_.separated;
-    }
-    double fsum = 0;
-    int sliding = 0, stuck = 0;
-    for (int c = 0; c < nc; ++c) {
-      if (!cr_active_[c]) continue;
-      fsum += cr_fn_[c];
-      if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
     }
     yarn_force_ = fsum;
     sliding_count_ = sliding;
@@ -1086,6 +1086,9 @@ class SolverT final : public Solver {
     ContactGeom g[kBatch];
     bool on[kBatch];
     bool tracked[kBatch];
+    if (first_pass_) {
+      for (int c = c0; c < c1; ++c) cr_fn_step_[c] = 0, cr_ft_[c] = 0, cr_event_[c] = 0;
+    }
     for (int c = c0; c < c1; ++c) {
       const int k = c - c0;
       CrossingImpulse& r = out[k];
@@ -1400,9 +1403,34 @@ class SolverT final : public Solver {
     const double Mp = model_.projectile_mass;
     V3 impulse_normal = V3::Zero(), impulse_fric = V3::Zero();
     int touching = 0;
-    for (int i = 0; i < n; ++i) {
+    // The nodes inside the projectile's bounding box, in node order (found by the threads,
+    // each in its own range, then taken range by range).
+    near_.clear();
+    if (threads_ > 1) {
+      near_part_.resize(threads_);
+#pragma omp parallel num_threads(threads_)
+      {
+#ifdef _OPENMP
+        const int t = omp_get_thread_num(), T = omp_get_num_threads();
+#else
+        const int t = 0, T = 1;
+#endif
+        std::vector<int>& mine = near_part_[t];
+        mine.clear();
+        for (int i = int(long(n) * t / T), hi = int(long(n) * (t + 1) / T); i < hi; ++i) {
+          const V3 rel = x_[i] - xp_;
+          if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) mine.push_back(i);
+        }
+      }
+      for (const auto& part : near_part_) near_.insert(near_.end(), part.begin(), part.end());
+    } else {
+      for (int i = 0; i < n; ++i) {
+        const V3 rel = x_[i] - xp_;
+        if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) near_.push_back(i);
+      }
+    }
+    for (const int i : near_) {
       const V3 rel = x_[i] - xp_;
-      if (std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R) continue;
       if (model_.fixed[i] == fix_all) continue;
       V3 nrm;
       const double sd = model_.shape.sdf(rel, nrm);
@@ -1596,6 +1624,8 @@ class SolverT final : public Solver {
   // impulse the yarn contact passed through them to the projectile, and their list.
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
+  std::vector<int> near_;                     // projectile_contact: nodes in its bounding box
+  std::vector<std::vector<int>> near_part_;  // the same, per thread
   std::vector<int> ptouch_list_;  // nodes the projectile touched this step (their dv_pfriction_)
   std::vector<std::uint8_t> held_flag_;    // held_n_ is nonzero (a compact test for the hot loops)
   std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections summed per node (gather, finish_pass)
@@ -1607,6 +1637,7 @@ class SolverT final : public Solver {
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
+  bool first_pass_ = true;  // yarn_contact: the pass running is the step's first
   std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
   std::vector<WindowIds> cr_win_;  // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
