@@ -16,7 +16,7 @@ struct ElementBatch {
   // In: node positions (x y z per node), the four elements' end nodes, rest lengths and
   // cross-sections; the Zener stepper's constants (ZenerStepper); the failure strain.
   const double* x;
-  const int *a, *b;             // at element e0 of the model's arrays, as the next four
+  const int *a, *b;  // at element e0 of the model's arrays, as the next four
   const double *rest, *area;
   double k1, k2, mu, dt, inv_dt, lam, g, decay, slack_decay;
   double fail;

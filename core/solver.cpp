@@ -236,7 +236,8 @@ class SolverT final : public Solver {
       // force, and no entry (adding and taking away the same half would only round).
       const int ends[4] = {model_.elem_a[e1], model_.elem_b[e1], model_.elem_a[e2], model_.elem_b[e2]};
       for (int k = 0; k < 4; ++k) {
-        const bool shared = (k < 2 ? (ends[k] == ends[2] || ends[k] == ends[3]) : (ends[k] == ends[0] || ends[k] == ends[1]));
+        const bool shared =
+            (k < 2 ? (ends[k] == ends[2] || ends[k] == ends[3]) : (ends[k] == ends[0] || ends[k] == ends[1]));
         if (!shared) nb[ends[k]].push_back({int(s), Real(k < 2 ? -0.5 : 0.5)});
       }
     }
@@ -319,7 +320,8 @@ class SolverT final : public Solver {
     for (int grp = 0; grp < ng; ++grp) {
       const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
       if constexpr (std::is_same_v<Real, double>) {
-        if (use_lanes && e1 - e0 == kBatch && !(broken_flag_[e0] | broken_flag_[e0 + 1] | broken_flag_[e0 + 2] | broken_flag_[e0 + 3])) {
+        if (use_lanes && e1 - e0 == kBatch &&
+            !(broken_flag_[e0] | broken_flag_[e0 + 1] | broken_flag_[e0 + 2] | broken_flag_[e0 + 3])) {
           lanes::ElementBatch b;
           b.x = x_[0].data();
           b.a = &model_.elem_a[e0];
@@ -347,7 +349,8 @@ class SolverT final : public Solver {
           }
         }
       }
-      for (int e = e0; e < e1; ++e) nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain);
+      for (int e = e0; e < e1; ++e)
+        nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain);
     }
     // Count failures serially to keep the count per family (only in a step with one).
     for (int e = 0; e < ne && nbroke > 0; ++e) {
@@ -596,11 +599,13 @@ class SolverT final : public Solver {
   // (rebuilt when the tracked pair has moved since): what load_window finds, without the
   // yarn offsets and bounds.
   struct WindowIds {
-    int kw = std::numeric_limits<int>::min(), kf = 0;  // the tracked pair these are for (none yet)
-    int node[6];                // warp kw-1..kw+1, weft kf-1..kf+1 (-1: past a yarn's end)
-    int wseg0, fseg0;           // element index of warp segment kw-1 and weft segment kf-1
-    std::uint8_t exists;        // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
+    // The tracked pair these are for (none yet).
+    int kw = std::numeric_limits<int>::min(), kf = 0;
+    int node[6];          // warp kw-1..kw+1, weft kf-1..kf+1 (-1: past a yarn's end)
+    int wseg0, fseg0;     // element index of warp segment kw-1 and weft segment kf-1
+    std::uint8_t exists;  // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
   };
+
   void load_window(int c, Window& w) {
     WindowIds& id = cr_win_[c];
     if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) {
@@ -884,7 +889,7 @@ class SolverT final : public Solver {
     V3 F;  // friction impulse on the weft contact point (Eq 15)
     bool has_n, has_f, has_s;
     bool any_held;  // a window node is held by the projectile (set by pass_normal)
-    bool hold;  // nodes the projectile holds do not yield into it (release_held)
+    bool hold;      // nodes the projectile holds do not yield into it (release_held)
   };
 
   void yarn_contact() {
@@ -1624,12 +1629,12 @@ class SolverT final : public Solver {
   // impulse the yarn contact passed through them to the projectile, and their list.
   std::vector<V3> held_n_, held_imp_;
   std::vector<int> held_list_;
-  std::vector<int> near_;                     // projectile_contact: nodes in its bounding box
+  std::vector<int> near_;                    // projectile_contact: nodes in its bounding box
   std::vector<std::vector<int>> near_part_;  // the same, per thread
-  std::vector<int> ptouch_list_;  // nodes the projectile touched this step (their dv_pfriction_)
-  std::vector<std::uint8_t> held_flag_;    // held_n_ is nonzero (a compact test for the hot loops)
-  std::vector<V3> sum_n_, sum_f_, sum_s_;  // a pass's corrections summed per node (gather, finish_pass)
-  V3 proj_impulse_ = V3::Zero();           // the projectile contact's impulse on the projectile this step
+  std::vector<int> ptouch_list_;             // nodes the projectile touched this step (their dv_pfriction_)
+  std::vector<std::uint8_t> held_flag_;      // held_n_ is nonzero (a compact test for the hot loops)
+  std::vector<V3> sum_n_, sum_f_, sum_s_;    // a pass's corrections summed per node (gather, finish_pass)
+  V3 proj_impulse_ = V3::Zero();             // the projectile contact's impulse on the projectile this step
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
   std::vector<V3> elem_force_, bend_force_;
@@ -1637,9 +1642,9 @@ class SolverT final : public Solver {
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
-  bool first_pass_ = true;  // yarn_contact: the pass running is the step's first
+  bool first_pass_ = true;                 // yarn_contact: the pass running is the step's first
   std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
-  std::vector<WindowIds> cr_win_;  // per crossing (load_window)
+  std::vector<WindowIds> cr_win_;          // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
   std::vector<CrossingImpulse> impulses_;
