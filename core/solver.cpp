@@ -115,7 +115,7 @@ class SolverT final : public Solver {
 #endif
   }
   void set_simd(bool on) override {
-    simd_ = on && std::is_same_v<Real, double> && lanes::available();
+    simd_ = on && lanes_possible();
   }
   bool simd_active() const override {
     return lanes_on();
@@ -320,8 +320,9 @@ class SolverT final : public Solver {
     for (int grp = 0; grp < ng; ++grp) {
       const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
       if constexpr (std::is_same_v<Real, double>) {
-        if (use_lanes && e1 - e0 == kBatch &&
-            !(broken_flag_[e0] | broken_flag_[e0 + 1] | broken_flag_[e0 + 2] | broken_flag_[e0 + 3])) {
+        bool intact = use_lanes && e1 - e0 == kBatch;
+        for (int e = e0; e < e1 && intact; ++e) intact = !broken_flag_[e];
+        if (intact) {
           lanes::ElementBatch b;
           b.x = x_[0].data();
           b.a = &model_.elem_a[e0];
@@ -552,6 +553,10 @@ class SolverT final : public Solver {
 
   // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
   Real arc_between(int yarn, double u0, double u1, const KnownLengths& known = {}) const {
+    // Both ends on one segment of known length (the usual stuck contact): (u1 - u0) times
+    // that length, which is what the general walk below gives then too.
+    if (const int a = floor_int(u0); unsigned(a - known.first) < 2u && a == floor_int(u1))
+      return Real(u1 - u0) * known.len[a - known.first];
     auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
     const int n = model_.yarn_size(yarn);
     double sign = 1;
@@ -595,9 +600,8 @@ class SolverT final : public Solver {
     V3 xw[3], xf[3];
     bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
   };
-  // The window of crossing c around its tracked pair, from the crossing's cached node ids
-  // (rebuilt when the tracked pair has moved since): what load_window finds, without the
-  // yarn offsets and bounds.
+  // The window's node ids around a tracked pair: what a window is loaded from. Each
+  // crossing keeps those of its tracked pair (cr_win_), rebuilt when the pair moves.
   struct WindowIds {
     // The tracked pair these are for (none yet).
     int kw = std::numeric_limits<int>::min(), kf = 0;
@@ -605,27 +609,30 @@ class SolverT final : public Solver {
     int wseg0, fseg0;     // element index of warp segment kw-1 and weft segment kf-1
     std::uint8_t exists;  // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
   };
-
-  void load_window(int c, Window& w) {
-    WindowIds& id = cr_win_[c];
-    if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) {
-      const Crossing& cr = model_.crossings[c];
-      const int kw = cr_kw_[c], kf = cr_kf_[c];
-      load_window(cr, kw, kf, w);
-      id.kw = kw;
-      id.kf = kf;
-      for (int k = 0; k < 3; ++k) id.node[k] = w.wnode[k], id.node[3 + k] = w.fnode[k];
-      id.wseg0 = model_.yarn_elem_offset[cr.warp_yarn] + kw - 1;
-      id.fseg0 = model_.yarn_elem_offset[cr.weft_yarn] + kf - 1;
-      const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
-      id.exists = 0;
-      for (int k = 0; k < 2; ++k) {
-        const int sw = kw - 1 + k, sf = kf - 1 + k;
-        if (sw >= 0 && sw + 1 < nw) id.exists |= std::uint8_t(1 << k);
-        if (sf >= 0 && sf + 1 < nf) id.exists |= std::uint8_t(4 << k);
-      }
-      return;
+  WindowIds window_ids(const Crossing& cr, int kw, int kf) const {
+    WindowIds id;
+    id.kw = kw;
+    id.kf = kf;
+    const int* wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];  // node ids by position along the yarn
+    const int* fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
+    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+    for (int k = 0; k < 3; ++k) {
+      const int iw = kw - 1 + k, jf = kf - 1 + k;
+      id.node[k] = (iw >= 0 && iw < nw) ? wn[iw] : -1;
+      id.node[3 + k] = (jf >= 0 && jf < nf) ? fn[jf] : -1;
     }
+    id.wseg0 = model_.yarn_elem_offset[cr.warp_yarn] + kw - 1;
+    id.fseg0 = model_.yarn_elem_offset[cr.weft_yarn] + kf - 1;
+    id.exists = 0;
+    for (int k = 0; k < 2; ++k) {
+      const int sw = kw - 1 + k, sf = kf - 1 + k;
+      if (sw >= 0 && sw + 1 < nw) id.exists |= std::uint8_t(1 << k);
+      if (sf >= 0 && sf + 1 < nf) id.exists |= std::uint8_t(4 << k);
+    }
+    return id;
+  }
+  // The nodes' positions and whether the four segments next to the pair are intact.
+  void load_window(const WindowIds& id, Window& w) const {
     w.kw = id.kw;
     w.kf = id.kf;
     for (int k = 0; k < 3; ++k) {
@@ -639,27 +646,14 @@ class SolverT final : public Solver {
       w.fseg[k] = (id.exists >> (2 + k) & 1) && !broken_flag_[id.fseg0 + k];
     }
   }
+  // The window of crossing c around its tracked pair.
+  void load_window(int c, Window& w) {
+    WindowIds& id = cr_win_[c];
+    if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) id = window_ids(model_.crossings[c], cr_kw_[c], cr_kf_[c]);
+    load_window(id, w);
+  }
   void load_window(const Crossing& cr, int kw, int kf, Window& w) const {
-    w.kw = kw;
-    w.kf = kf;
-    const int* wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];  // node ids by position along the yarn
-    const int* fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
-    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
-    for (int k = 0; k < 3; ++k) {
-      const int iw = kw - 1 + k, jf = kf - 1 + k;
-      w.wnode[k] = (iw >= 0 && iw < nw) ? wn[iw] : -1;
-      w.fnode[k] = (jf >= 0 && jf < nf) ? fn[jf] : -1;
-      if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
-      if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
-    }
-    // seg_ok of segments kw - 1, kw and kf - 1, kf, with each yarn's offsets looked up once.
-    const std::uint8_t* wb = &broken_flag_[model_.yarn_elem_offset[cr.warp_yarn]];
-    const std::uint8_t* fb = &broken_flag_[model_.yarn_elem_offset[cr.weft_yarn]];
-    for (int k = 0; k < 2; ++k) {
-      const int sw = kw - 1 + k, sf = kf - 1 + k;
-      w.wseg[k] = sw >= 0 && sw + 1 < nw && !wb[sw];
-      w.fseg[k] = sf >= 0 && sf + 1 < nf && !fb[sf];
-    }
+    load_window(window_ids(cr, kw, kf), w);
   }
 
   // Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
@@ -892,15 +886,28 @@ class SolverT final : public Solver {
     bool hold;      // nodes the projectile holds do not yield into it (release_held)
   };
 
+  // Inside a parallel region: this thread's share [lo, hi) of n items (contiguous, in
+  // thread order) and its number t.
+  static void my_share(int n, int& lo, int& hi, int& t) {
+#ifdef _OPENMP
+    t = omp_get_thread_num();
+    const int T = omp_get_num_threads();
+#else
+    t = 0;
+    const int T = 1;
+#endif
+    lo = int(long(n) * t / T);
+    hi = int(long(n) * (t + 1) / T);
+  }
+
   void yarn_contact() {
     const int nc = int(model_.crossings.size());
     const int N = model_.contact_iterations;
     impulses_.resize(nc);  // (cr_fn_step_, cr_ft_ and cr_event_ are cleared by each crossing's first pass)
     for (int pass = 1; pass <= N; ++pass) {
-      first_pass_ = pass == 1;
       // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
       const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
-      const bool last = pass == N;
+      const bool first = pass == 1, last = pass == N;
       if (threads_ > 1) {
         // Every crossing's corrections from the same state (Jacobi), then applied: each
         // thread owns a range of nodes and applies, in crossing order, the changes that
@@ -911,7 +918,7 @@ class SolverT final : public Solver {
 #pragma omp parallel for num_threads(threads_) schedule(static)
         for (int b = 0; b < nb; ++b) {
           const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
-          crossing_batch(c0, c1, alpha, last, &impulses_[c0]);
+          crossing_batch(c0, c1, alpha, first, last, &impulses_[c0]);
           for (int c = c0; c < c1; ++c) {
             // The lowest and highest node the record can touch.
             const CrossingImpulse& r = impulses_[c];
@@ -934,12 +941,8 @@ class SolverT final : public Solver {
         for (int c = nc - 2; c >= 0; --c) rec_first_[c] = std::min(rec_first_[c], rec_first_[c + 1]);
 #pragma omp parallel num_threads(threads_)
         {
-#ifdef _OPENMP
-          const int t = omp_get_thread_num(), T = omp_get_num_threads();
-#else
-          const int t = 0, T = 1;
-#endif
-          const int lo = int(long(model_.node_count) * t / T), hi = int(long(model_.node_count) * (t + 1) / T);
+          int lo, hi, t;
+          my_share(model_.node_count, lo, hi, t);
           const int c_first = int(std::lower_bound(rec_last_.begin(), rec_last_.end(), lo) - rec_last_.begin());
           const int c_end = int(std::lower_bound(rec_first_.begin(), rec_first_.end(), hi) - rec_first_.begin());
           for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
@@ -953,7 +956,7 @@ class SolverT final : public Solver {
         CrossingImpulse rs[kBatch];
         for (int c0 = 0; c0 < nc; c0 += kBatch) {
           const int c1 = std::min(nc, c0 + kBatch);
-          crossing_batch(c0, c1, alpha, last, rs);
+          crossing_batch(c0, c1, alpha, first, last, rs);
           for (int c = c0; c < c1; ++c)
             if (gather(rs[c - c0], 0, model_.node_count, kSums)) held_records_.push_back(rs[c - c0]);
         }
@@ -1086,12 +1089,13 @@ class SolverT final : public Solver {
   bool lanes_on() const {
     return simd_;  // set_simd: asked for, double precision, and the processor has the lanes
   }
-  void crossing_batch(int c0, int c1, Real alpha, bool last, CrossingImpulse* out) {
+  // `first`: the step's first pass, which clears the crossings' per-step state.
+  void crossing_batch(int c0, int c1, Real alpha, bool first, bool last, CrossingImpulse* out) {
     Window w[kBatch];
     ContactGeom g[kBatch];
     bool on[kBatch];
     bool tracked[kBatch];
-    if (first_pass_) {
+    if (first) {
       for (int c = c0; c < c1; ++c) cr_fn_step_[c] = 0, cr_ft_[c] = 0, cr_event_[c] = 0;
     }
     for (int c = c0; c < c1; ++c) {
@@ -1361,23 +1365,15 @@ class SolverT final : public Solver {
       // K = alpha_f m / dt^2, m the effective mass of the relative motion: alpha_f = 1
       // returns the contact to its stuck point in exactly one step.
       const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
-      // arc_between(yarn, u0, u1, known), done here when both ends lie on one segment of known
-      // length (the usual stuck contact): (u1 - u0) times that length, as arc_between has it.
-      auto arc = [&](int yarn, double u0, double u1, const KnownLengths& known) {
-        const int a = floor_int(u0);
-        const unsigned i = unsigned(a - known.first);
-        if (i < 2 && a == floor_int(u1)) return double(Real(u1 - u0) * known.len[i]);
-        return double(arc_between(yarn, u0, u1, known));
-      };
       auto one_yarn = [&](int yarn, double cur, double& stick, double& force, const KnownLengths& known) {
-        const double slip = arc(yarn, stick, cur, known);  // Delta s of Eq 12
+        const double slip = double(arc_between(yarn, stick, cur, known));  // Delta s of Eq 12
         const double trial = K * slip;
         if (std::abs(trial) <= limit) {
           force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
         } else {
           force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
           const double new_stick = advance(yarn, cur, -force / K, known);
-          moved += std::abs(arc(yarn, stick, new_stick, known));
+          moved += std::abs(double(arc_between(yarn, stick, new_stick, known)));
           stick = new_stick;
           slid = true;
         }
@@ -1410,30 +1406,20 @@ class SolverT final : public Solver {
     int touching = 0;
     // The nodes inside the projectile's bounding box, in node order (found by the threads,
     // each in its own range, then taken range by range).
-    near_.clear();
-    if (threads_ > 1) {
-      near_part_.resize(threads_);
-#pragma omp parallel num_threads(threads_)
-      {
-#ifdef _OPENMP
-        const int t = omp_get_thread_num(), T = omp_get_num_threads();
-#else
-        const int t = 0, T = 1;
-#endif
-        std::vector<int>& mine = near_part_[t];
-        mine.clear();
-        for (int i = int(long(n) * t / T), hi = int(long(n) * (t + 1) / T); i < hi; ++i) {
-          const V3 rel = x_[i] - xp_;
-          if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) mine.push_back(i);
-        }
-      }
-      for (const auto& part : near_part_) near_.insert(near_.end(), part.begin(), part.end());
-    } else {
-      for (int i = 0; i < n; ++i) {
+    near_part_.resize(threads_);
+#pragma omp parallel num_threads(threads_) if (threads_ > 1)
+    {
+      int lo, hi, t;
+      my_share(n, lo, hi, t);
+      std::vector<int>& mine = near_part_[t];
+      mine.clear();
+      for (int i = lo; i < hi; ++i) {
         const V3 rel = x_[i] - xp_;
-        if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) near_.push_back(i);
+        if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) mine.push_back(i);
       }
     }
+    near_.clear();
+    for (const auto& part : near_part_) near_.insert(near_.end(), part.begin(), part.end());
     for (const int i : near_) {
       const V3 rel = x_[i] - xp_;
       if (model_.fixed[i] == fix_all) continue;
@@ -1621,7 +1607,10 @@ class SolverT final : public Solver {
   int threads_ = 1;
   // Lanes in use (contact_lanes.h, element_lanes.h): asked for, double precision, and the
   // processor has them.
-  bool simd_ = std::is_same_v<Real, double> && lanes::available();
+  static bool lanes_possible() {
+    return std::is_same_v<Real, double> && lanes::available();
+  }
+  bool simd_ = lanes_possible();
   ZenerStepper zener_;
   std::vector<V3> x_, v_, f_, v_prev_;
   std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism
@@ -1642,7 +1631,6 @@ class SolverT final : public Solver {
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;
-  bool first_pass_ = true;                 // yarn_contact: the pass running is the step's first
   std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
   std::vector<WindowIds> cr_win_;          // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
