@@ -13,6 +13,9 @@
 namespace ravel::lanes {
 
 constexpr int kWidth = 4;
+// A node that projects this close to an end of the chord through its neighbours (a yarn
+// folded back at it) keeps the chord's linear material coordinate (SolverT::chord_coord).
+constexpr double kChordNodeMin = 0.01;
 
 // Four crossing windows. The inputs point into each crossing's own window (read in place:
 // copying them into lane order first would stall every vector load on the copies), the

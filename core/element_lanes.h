@@ -21,13 +21,14 @@ struct ElementBatch {
   double k1, k2, mu, dt, inv_dt, lam, g, decay, slack_decay;
   double fail;
   bool breakable;
+  double damping_k = 0;  // beta E_inst of the element damping (SolverT::element_one)
   // In/out, per element (pointers to element e0 of the solver's arrays): last step's strain
   // (becomes this step's), the viscous strain; out: strain, stress, stored energy and the
   // force on node b (x y z per element).
   double *prev_strain, *ev, *strain, *stress, *energy, *force;
   // Out, per lane, for the solver's sums (taken in element order): stored energy, energy
   // dissipated by the dashpot over the step, strain.
-  double u[kWidth], dd[kWidth], eps[kWidth];
+  double u[kWidth], dd[kWidth], eps[kWidth], dw[kWidth];  // (dw: the element damping's work)
 };
 
 // Updates the four elements and returns true, or returns false without writing anything

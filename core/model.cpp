@@ -26,7 +26,10 @@ Model build_model(const Scene& scene) {
   const auto& p = scene.projectile;
   const int k = f.yarns_per_element;
   const double L0 = f.spacing_m * k;
-  const double L1 = f.crossing_gap_m;
+  // A lumped mesh (k real yarns per modelled yarn) scales the crossing geometry with the
+  // spacing, so its crimp angle L1 / L0, and with it the interlock a sliding yarn climbs,
+  // stays the real fabric's (docs/MODEL.md §1).
+  const double L1 = f.crossing_gap_m * k;
   const bool single = f.weave == Weave::single_yarn;
   const bool sliding = !single && scene.solver.model == ContactModel::sliding;
   m.contact = single ? ContactModel::pin_jointed : scene.solver.model;
@@ -93,6 +96,7 @@ Model build_model(const Scene& scene) {
   m.split_penetration = scene.solver.split_penetration;
   m.projectile_holds = scene.solver.projectile_holds;
   m.contact_iterations = scene.solver.contact_iterations;
+  m.compression = f.crossing_compression;
 
   const double node_mass = f.node_mass_kg * double(k) * double(k);
   const double area = y.area_m2 * k;
@@ -182,13 +186,18 @@ Model build_model(const Scene& scene) {
   m.node_count = int(m.x0.size());
 
   // ---- elements and bending springs
-  // Rest length: the crimped length sqrt(L0^2 + L1^2) of the zig-zag (paper Fig. 1). The
-  // pin-jointed and single-yarn models put their nodes at z = 0, so their elements start
-  // slack by the crimp and straighten before they carry load (crimp interchange, ref [8]).
-  // A lumped element spans k real ones and keeps their crimp: rest length k times the
-  // real crimped length (it starts slack when its own zig-zag is flatter).
-  const double L0_real = f.spacing_m;
-  const double crimped = single ? L0 : k * std::sqrt(L0_real * L0_real + L1 * L1);
+  // Rest length: the crimped length sqrt(L0^2 + L1^2) of the zig-zag (paper Fig. 1; with L0
+  // and L1 scaled alike when lumped). The pin-jointed model puts its nodes at z = 0, L0
+  // apart: its elements take up the crimp in a soft crimp stage of the yarn law before the
+  // yarn stretches (crimp interchange, ref [8]; see Model::crimp_strain). A single yarn is
+  // straight.
+  const double crimped = single ? L0 : std::sqrt(L0 * L0 + L1 * L1);
+  const double rest_len = sliding || single ? crimped : L0;
+  if (!sliding && !single) {
+    m.crimp_strain = crimped / L0 - 1;
+    m.crimp_fraction = y.crimp_modulus_fraction;
+    m.crimp_width = m.crimp_strain;
+  }
   m.yarn_end_free.resize(m.yarn_count());
   m.yarn_start_mirror.assign(m.yarn_count(), -1);
   for (int yy = 0; yy < m.yarn_count(); ++yy) {
@@ -202,7 +211,7 @@ Model build_model(const Scene& scene) {
       m.elem_a.push_back(m.yarn_node(yy, kk));
       m.elem_b.push_back(m.yarn_node(yy, kk + 1));
       m.elem_yarn.push_back(yy);
-      m.elem_rest.push_back(crimped);
+      m.elem_rest.push_back(rest_len);
       m.elem_area.push_back(a);
       m.elem_stiffness.push_back(m.modulus_inst * a / crimped);
     }
@@ -240,7 +249,7 @@ Model build_model(const Scene& scene) {
   m.element_count = int(m.elem_a.size());
 
   // ---- crossings (sliding)
-  const double D = 0.5 * f.thickness_m;
+  const double D = 0.5 * f.thickness_m * k;
   if (sliding) {
     for (int wi = 0; wi < m.warp_count; ++wi) {
       for (int fj = 0; fj < m.weft_count; ++fj) {
@@ -276,6 +285,12 @@ Model build_model(const Scene& scene) {
           }
         }
         c.contact_distance = std::min(D, best);
+        if (m.compression == CrossingCompression::hyperbolic) {
+          c.flattened_distance = std::min(f.flattened_gap_m * k, c.contact_distance);
+          c.compression_force = f.compression_force_n * double(k) * double(k) * plane_factor(c.grid_i, c.grid_j);
+        } else {
+          c.flattened_distance = c.contact_distance;
+        }
         m.crossings.push_back(c);
       }
     }
@@ -284,7 +299,8 @@ Model build_model(const Scene& scene) {
   // ---- time step (Eq 4)
   m.wave_speed = std::sqrt(m.modulus_inst / m.density);
   m.shortest_element = 1e300;
-  for (double r : m.elem_rest) m.shortest_element = std::min(m.shortest_element, r);
+  // (the yarn's own length: a pin-jointed element's material is its crimped length)
+  for (double r : m.elem_rest) m.shortest_element = std::min(m.shortest_element, r * (1 + m.crimp_strain));
   m.dt = scene.solver.dt_factor * m.shortest_element / m.wave_speed;
   // Central differences on a chain of lumped masses m joined by springs k are stable for
   // dt < 2/omega_max = sqrt(m_node/k) (each node feels two springs plus 5 % bending);
@@ -297,6 +313,9 @@ Model build_model(const Scene& scene) {
     m.critical_dt_factor = std::sqrt(m_line / k_axial) / std::sqrt(1.0 + bend) * m.wave_speed / m.shortest_element;
   }
   m.end_time = scene.solver.end_time_s;
+  // Snap damping: a fraction zeta of critical at the chain's highest axial frequency
+  // omega_max = 2 c / L, as a stress beta E_inst d(eps)/dt with beta = 2 zeta / omega_max.
+  m.element_damping_beta = scene.solver.snap_damping * m.shortest_element / m.wave_speed;
 
   // ---- projectile
   m.shape.kind = p.shape;

@@ -32,7 +32,13 @@ struct Crossing {
   int warp_node = 0, weft_node = 0;  // initial nearest node, as position along each yarn
   int grid_i = 0, grid_j = 0;        // global crossing indices I, J
   double side = 1.0;                 // n = side * normalize(t_warp x t_weft) points warp -> weft
-  double contact_distance = 0.0;     // D used at this crossing (min of D and the rest distance)
+  double contact_distance = 0.0;     // D used at this crossing (min of D and the rest distance): c0
+  // Compression (hyperbolic law): the distance of fully flattened yarns (c_min <= c0; = c0
+  // when rigid) and the force F_half of this modelled crossing (the scene's per real
+  // crossing, times the real crossings it stands for: k^2 when lumped, halved on each
+  // symmetry plane it lies on).
+  double flattened_distance = 0.0;
+  double compression_force = 0.0;
 };
 
 struct Model {
@@ -68,9 +74,15 @@ struct Model {
   // --- elements (straight two-node yarn segments, tension only)
   int element_count = 0;
   std::vector<int> elem_a, elem_b, elem_yarn;
-  std::vector<double> elem_rest;       // initial (crimped) length, m
-  std::vector<double> elem_area;       // m^2 (half for a yarn on a symmetry plane, x k when lumped)
+  std::vector<double> elem_rest;  // initial length, m: the crimped zig-zag's (sliding), the node spacing (pin-jointed)
+  std::vector<double> elem_area;  // m^2 (half for a yarn on a symmetry plane, x k when lumped)
   std::vector<double> elem_stiffness;  // instantaneous axial stiffness E_inst A / L, N/m
+
+  // --- pin-jointed crimp stage (docs/MODEL.md §1): an element's apparent strain e = len / L0 - 1
+  // takes up the crimp e_c = sqrt(L0^2 + L1^2) / L0 - 1 in a toe whose stiffness rises from
+  // crimp_fraction (r) of the modulus to all of it over [0, 2 crimp_width], crimp_width = e_c
+  // (SolverT::crimp_stage). crimp_strain = 0: no crimp stage (sliding and single-yarn models).
+  double crimp_strain = 0, crimp_fraction = 0, crimp_width = 0;
 
   // --- bending: compression-only springs between midpoints of adjoining elements.
   // bend_mirror >= 0 marks the spring that, in the full fabric, joins a yarn's first
@@ -85,6 +97,7 @@ struct Model {
   bool split_penetration = true;
   bool projectile_holds = true;
   int contact_iterations = 1;
+  CrossingCompression compression = CrossingCompression::rigid;
 
   // --- material
   Material material = Material::zener;
@@ -108,6 +121,7 @@ struct Model {
   double wave_speed = 0;  // sqrt(E_inst / rho)
   double shortest_element = 0;
   double critical_dt_factor = 1.0;  // estimate of the alpha at which central differences go unstable
+  double element_damping_beta = 0;  // s: beta of the snap damping (solver.snap_damping x L / c)
   double end_time = 0;
 
   // --- fabric extent (whole fabric)

@@ -50,6 +50,9 @@ const char* to_string(Material m) {
 const char* to_string(Weave w) {
   return w == Weave::plain ? "plain" : "single_yarn";
 }
+const char* to_string(CrossingCompression c) {
+  return c == CrossingCompression::rigid ? "rigid" : "hyperbolic";
+}
 const char* to_string(ShapeKind s) {
   switch (s) {
     case ShapeKind::sphere:
@@ -79,6 +82,9 @@ struct KeyDef {
   std::function<double(const Scene&)> get_number;  // SI value
   std::function<void(Scene&, const std::string&)> set_text;
   std::function<std::string(const Scene&)> get_text;
+  // Number keys that also take the word "auto" (solver.end_time_us).
+  std::function<void(Scene&)> set_auto = nullptr;
+  std::function<bool(const Scene&)> is_auto = nullptr;
 };
 
 #define NUM(KEY, UNIT, DESC, SCALE, MIN, MINEX, MAX, FIELD)                              \
@@ -189,6 +195,35 @@ std::vector<KeyDef> make_defs() {
     d.get_text = [](const Scene& s) { return s.fabric.clamped.to_string(); };
     defs.push_back(d);
   }
+  {
+    KeyDef d{"fabric.crossing_compression",
+             "",
+             "rigid (crossing yarns keep their centre distance D under any load, the paper read literally) or "
+             "hyperbolic (the distance falls from its rest value towards fabric.flattened_gap_mm as the normal force "
+             "grows: c = c_min + (c0 - c_min) / (1 + f / F_half))",
+             Type::text,
+             1.0,
+             0,
+             0,
+             false,
+             {},
+             {},
+             {},
+             {},
+             {}};
+    d.choices = {"rigid", "hyperbolic"};
+    d.set_text = [](Scene& s, const std::string& v) {
+      s.fabric.crossing_compression = v == "rigid" ? CrossingCompression::rigid : CrossingCompression::hyperbolic;
+    };
+    d.get_text = [](const Scene& s) { return std::string(to_string(s.fabric.crossing_compression)); };
+    defs.push_back(d);
+  }
+  NUM("fabric.flattened_gap_mm", "mm",
+      "c_min: centre distance of two crossing yarns pressed fully flat (fibres packed); below D", 1e-3, 0, true, inf,
+      fabric.flattened_gap_m);
+  NUM("fabric.compression_force_n", "N",
+      "F_half: normal force per crossing that closes half of the compressible distance D - c_min", 1, 0, true, inf,
+      fabric.compression_force_n);
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
   {
@@ -224,6 +259,11 @@ std::vector<KeyDef> make_defs() {
   NUM("yarn.bending_fraction", "",
       "stiffness of the compression-only bending springs / element axial stiffness (paper: 0.05)", 1, 0, false, 1.0,
       yarn.bending_fraction);
+  NUM("yarn.crimp_modulus_fraction", "",
+      "pin-jointed model: stiffness at the start of the crimp stage (the yarn straightening its crimp, "
+      "sqrt(L0^2 + L1^2) / L0 - 1 of stretch), as a fraction of the yarn modulus; it rises to the full modulus "
+      "as the crimp is taken up",
+      1, 0, false, 0.9, yarn.crimp_modulus_fraction);
   {
     KeyDef d{"projectile.shape",
              "",
@@ -336,13 +376,36 @@ std::vector<KeyDef> make_defs() {
     };
     defs.push_back(d);
   }
-  NUM("solver.end_time_us", "us", "latest simulated time (a run also ends at perforation or rebound)", 1e-6, 0, true,
-      1e5, solver.end_time_s);
+  NUM("solver.end_time_us", "us",
+      "latest simulated time (a run also ends at perforation or rebound); auto: until perforation or rebound, at "
+      "most solver.max_end_time_us",
+      1e-6, 0, true, 1e5, solver.end_time_s);
+  defs.back().set_number = [](Scene& s, double v) {
+    s.solver.end_time_s = v;
+    s.solver.end_time_auto = false;
+  };
+  defs.back().set_auto = [](Scene& s) {
+    s.solver.end_time_auto = true;
+    s.solver.end_time_s = s.solver.max_end_time_s;
+  };
+  defs.back().is_auto = [](const Scene& s) { return s.solver.end_time_auto; };
+  NUM("solver.max_end_time_us", "us",
+      "cap of an auto end time, and how far ballistic-limit searches extend a run that reached its end time "
+      "undecided",
+      1e-6, 0, true, 1e5, solver.max_end_time_s);
+  defs.back().set_number = [](Scene& s, double v) {
+    s.solver.max_end_time_s = v;
+    if (s.solver.end_time_auto) s.solver.end_time_s = v;
+  };
   INT("solver.threads", "", "worker threads for the step (0 = all cores)", 0, 256, solver.threads);
   BOOL("solver.simd",
        "true: the yarn contact's geometry and the Zener elements are computed four at a time in AVX2 lanes where "
        "the processor has them (double precision; the same numbers bit for bit); false: one at a time",
        solver.simd);
+  NUM("solver.snap_damping", "",
+      "damping of a slack yarn element snapping taut, as a fraction of critical at the elements' highest axial "
+      "mode (in that step its stress gains beta E strain rate, beta = this x L / c); 0 = none",
+      1, 0, false, 0.2, solver.snap_damping);
   NUM("solver.max_balance_error", "",
       "a run whose energy ledger misses the initial energy by more than this fraction is declared diverged", 1, 0, true,
       1e3, solver.max_balance_error);
@@ -421,6 +484,8 @@ const std::vector<UnitSlip>& unit_slips() {
       {"fabric.spacing_mm", 0.05, 20, {{"m", 1e3}, {"um", 1e-3}}},
       {"fabric.crossing_gap_mm", 0.005, 5, {{"m", 1e3}, {"um", 1e-3}}},
       {"fabric.thickness_mm", 0.01, 20, {{"m", 1e3}, {"um", 1e-3}}},
+      {"fabric.flattened_gap_mm", 0.005, 5, {{"m", 1e3}, {"um", 1e-3}}},
+      {"fabric.compression_force_n", 1e-3, 1e4, {{"kN", 1e3}, {"mN", 1e-3}}},
       {"projectile.diameter_mm", 0.5, 300, {{"m", 1e3}, {"cm", 10}}},
       {"projectile.length_mm", 0.5, 1000, {{"m", 1e3}, {"cm", 10}}},
       {"projectile.mass_g", 0.05, 1e5, {{"kg", 1e3}, {"mg", 1e-3}}},
@@ -555,6 +620,11 @@ void apply_node(Scene& s, const std::string& key, const toml::node& node, const 
         apply_number(s, *d, *v, where);
         return;
       }
+      if (auto t = node.value<std::string>(); t && node.is_string() && d->set_auto) {
+        if (*t != "auto") throw SceneError(key, where, "expected a number or \"auto\", got '" + *t + "'");
+        d->set_auto(s);
+        return;
+      }
       break;
     case Type::boolean:
       if (auto v = node.value<bool>(); v && node.is_boolean()) {
@@ -611,6 +681,10 @@ void apply_override(Scene& s, const std::string& kv) {
       std::string low = val;
       std::transform(low.begin(), low.end(), low.begin(), ::tolower);
       double v;
+      if (low == "auto" && d->set_auto) {
+        d->set_auto(s);
+        return;
+      }
       if (low == "nan")
         v = std::numeric_limits<double>::quiet_NaN();
       else if (low == "inf" || low == "+inf")
@@ -700,6 +774,7 @@ void validate_scene(Scene& s) {
     if (!d.get_number) continue;
     double v = d.get_number(s) / d.scale;
     if (d.type == Type::boolean) continue;
+    if (d.is_auto && d.is_auto(s)) continue;
     apply_number(s, d, v, where(d.key));  // re-applies the same value: validates it
   }
   const auto& f = s.fabric;
@@ -719,6 +794,10 @@ void validate_scene(Scene& s) {
       fail("fabric.spacing_mm", "more than a million nodes along the yarn (" + fmt(std::round(f.length_m / L0)) + ")");
   }
   if (f.crossing_gap_m > L0) fail("fabric.crossing_gap_mm", "L1 larger than the node spacing L0 is not a woven fabric");
+  if (f.crossing_compression == CrossingCompression::hyperbolic && f.flattened_gap_m >= 0.5 * f.thickness_m)
+    fail("fabric.flattened_gap_mm", "the flattened centre distance (" + fmt3(f.flattened_gap_m * 1e3) +
+                                        " mm) must be below the rest distance D = fabric.thickness_mm / 2 = " +
+                                        fmt3(0.5 * f.thickness_m * 1e3) + " mm");
   // The projectile against the fabric as a whole (after the fabric itself): a clearer message than "does not
   // fit at the strike point" when no strike point could work.
   const double fabric_min = f.weave == Weave::plain ? std::min(f.width_m, f.length_m) : f.length_m;
@@ -775,9 +854,11 @@ void validate_scene(Scene& s) {
   const double c = std::sqrt(E / s.yarn.density_kg_m3);
   const double steps = s.solver.end_time_s / (s.solver.dt_factor * std::min(L0, elem_len) / c);
   const std::string modulus_key = s.yarn.material == Material::zener ? "yarn.k1_pa" : "yarn.modulus_pa";
-  if (steps < 2)
+  // An auto end runs until the impact decides: a cap that holds fewer than 100 steps cannot.
+  if (steps < 2 || (s.solver.end_time_auto && steps < 100))
     fail(modulus_key, "one time step (dt = alpha L0 / c = " + fmt3(s.solver.end_time_s / steps * 1e6) +
-                          " us, wave speed c = " + fmt3(c) + " m/s) is longer than the run (solver.end_time_us = " +
+                          " us, wave speed c = " + fmt3(c) + " m/s) is longer than the run (" +
+                          (s.solver.end_time_auto ? "solver.max_end_time_us = " : "solver.end_time_us = ") +
                           fmt3(s.solver.end_time_s * 1e6) + "); check the modulus, density and end time");
   if (steps > kMaxSteps)
     fail(modulus_key, "this scene would need about " + fmt3(steps) + " time steps (dt = alpha L0 / c with c = " +
@@ -864,7 +945,9 @@ std::string scene_to_toml(const Scene& s) {
       section = sec;
     }
     o << name << " = ";
-    if (d.type == Type::text) {
+    if (d.is_auto && d.is_auto(s)) {
+      o << "\"auto\"";
+    } else if (d.type == Type::text) {
       o << toml_string(d.get_text(s));
     } else if (d.type == Type::boolean) {
       o << (d.get_number(s) != 0 ? "true" : "false");

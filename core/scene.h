@@ -18,6 +18,8 @@ enum class ContactModel { pin_jointed, sliding };
 enum class SymmetryMode { automatic, full };
 enum class Precision { double_precision, single_precision };
 enum class ShapeKind { sphere, cylinder, cone };
+// How a crossing's centre distance responds to its normal force (docs/MODEL.md §4).
+enum class CrossingCompression { rigid, hyperbolic };
 
 // Which fabric edges are clamped. "left"/"right" are the edges x = -W/2 and x = +W/2
 // (they hold the weft yarns, which run along x); "bottom"/"top" are y = -L/2, +L/2
@@ -38,6 +40,12 @@ struct FabricParams {
   double thickness_m = 0.40e-3;    // fabric thickness; contact diameter D = thickness / 2
   ClampedEdges clamped;
   int yarns_per_element = 1;  // k real yarns lumped into one modelled yarn
+  // Transverse compression of the yarns at a crossing: rigid (the paper read literally:
+  // centre distance D whatever the load) or hyperbolic, c(f) = c_min + (c0 - c_min) /
+  // (1 + f / F_half), c0 the rest distance, f the crossing's normal force.
+  CrossingCompression crossing_compression = CrossingCompression::hyperbolic;
+  double flattened_gap_m = 0.10e-3;  // c_min: centre distance of two fully flattened yarns
+  double compression_force_n = 0.5;  // F_half: normal force that closes half of c0 - c_min
 };
 
 struct YarnParams {
@@ -52,6 +60,9 @@ struct YarnParams {
   bool breakable = true;
   double friction = 0.2;           // yarn-yarn Coulomb coefficient mu
   double bending_fraction = 0.05;  // compression spring stiffness / element axial stiffness
+  // Pin-jointed model: stiffness of the crimp stage (the yarn straightening its crimp before it
+  // stretches) as a fraction of the yarn's modulus.
+  double crimp_modulus_fraction = 0.05;
 };
 
 struct ProjectileParams {
@@ -75,9 +86,16 @@ struct SolverParams {
   bool projectile_holds = true;    // nodes on the projectile do not yield into it under yarn contact
   SymmetryMode symmetry = SymmetryMode::automatic;
   Precision precision = Precision::double_precision;
-  double end_time_s = 150e-6;
-  int threads = 1;                  // 0 = all cores
-  bool simd = true;                 // closest points in AVX2 lanes where available (bit-identical)
+  // Latest simulated time. auto: run until perforation or rebound, at most max_end_time_s
+  // (then end_time_s is that cap); a number is a hard end.
+  bool end_time_auto = true;
+  double end_time_s = 5000e-6;
+  double max_end_time_s = 5000e-6;
+  int threads = 1;   // 0 = all cores
+  bool simd = true;  // closest points in AVX2 lanes where available (bit-identical)
+  // Damping of a slack element's snap taut, as a fraction of critical at the elements' highest
+  // axial mode (docs/MODEL.md §3).
+  double snap_damping = 0.01;
   double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
   double max_search_lost =
       0.01;  // nearest-pair search lost at more than this fraction of crossings in one step -> diverged
@@ -144,5 +162,6 @@ const char* to_string(ContactModel m);
 const char* to_string(Material m);
 const char* to_string(Weave w);
 const char* to_string(ShapeKind s);
+const char* to_string(CrossingCompression c);
 
 }  // namespace ravel

@@ -47,6 +47,9 @@ namespace {
 // A perforation is confirmed when the projectile has been free of every node for this long
 // while still moving forward, and no node lies ahead of it within its silhouette.
 constexpr double kPerforationConfirm_s = 3e-6;
+// A node this close to the projectile's surface (or inside it) touches it: the contact puts
+// touching nodes on the surface to rounding.
+constexpr double kTouching_m = 1e-6;
 // solver.max_search_lost never trips on fewer crossings than this in one step (a small
 // patch has a few hundred crossings; one lost pair is a warning, not a divergence).
 constexpr double kMinSearchLost = 4;
@@ -68,6 +71,10 @@ struct Simulation::Impl {
   long sample_every = 1;
   double worst_balance = 0;
   double perforation_time = -1;
+  double last_attached_touch = -1;
+  int extensions = 0;   // times extend_to reopened the run
+  double end_time = 0;  // the model's, or later when a study extends an undecided run (extend_to)  // last check that
+                        // found a node attached to the clamps on the projectile
   double wall_s = 0;
   std::vector<std::string> warnings;
   std::string fault_cause;
@@ -104,26 +111,42 @@ struct Simulation::Impl {
   // symmetry_factor elements (those on a symmetry plane for half as many).
   double broken_weight(int) const { return model().symmetry_factor; }
 
+  // Perforated (docs/MODEL.md §8): the projectile has been free of every node attached to the
+  // clamps for kPerforationConfirm_s, still moves forward, and no attached node lies ahead of
+  // it inside its silhouette: it has passed through the fabric. Loose pieces (broken-off
+  // yarn, or a yarn that ravelled out of the weave and rides on the projectile) neither hold
+  // it nor stand in its way. An attached node ahead counts whatever its speed: fabric that
+  // runs ahead of a slowed projectile has caught it, not let it through.
   bool perforation_confirmed() {
-    if (!solver->had_contact() || solver->nodes_on_projectile() > 0) return false;
-    if (forward_velocity() <= 0) return false;
-    if (solver->time() - solver->last_contact_time() < kPerforationConfirm_s) return false;
+    if (!solver->had_contact() || forward_velocity() <= 0) return false;
     const Model& m = model();
     const Vec3d xp = solver->projectile_position();
+    std::vector<char> attached;
+    double last_touch = solver->last_contact_time();
+    if (solver->nodes_on_projectile() > 0) {
+      attached = attached_nodes();
+      for (int i = 0; i < m.node_count; ++i) {
+        if (!attached[i]) continue;
+        Vec3d nrm;
+        if (m.shape.sdf(Vec3d(solver->position(i) - xp), nrm) <= kTouching_m) {
+          last_attached_touch = solver->time();
+          return false;
+        }
+      }
+      last_touch = last_attached_touch >= 0 ? last_attached_touch : solver->time();
+      if (last_attached_touch < 0) last_attached_touch = solver->time();
+    }
+    if (solver->time() - last_touch < kPerforationConfirm_s) return false;
+    if (attached.empty()) attached = attached_nodes();
     const double R = m.shape.radius;
-    // The fabric still holds the projectile if a node that is attached to the clamps (through
-    // unbroken elements and yarn-yarn contacts) lies ahead of it inside its silhouette and
-    // moves forward slower than it. Loose debris (broken-off yarn pieces) does not count.
-    const std::vector<char> attached = attached_nodes();
-    const double vf = forward_velocity();
     for (int i = 0; i < m.node_count; ++i) {
       if (!attached[i]) continue;
       const Vec3d rel = solver->position(i) - xp;
       const double ahead = rel.dot(m.flight_dir);
       if (ahead <= 0) continue;
-      if ((rel - ahead * m.flight_dir).squaredNorm() >= R * R) continue;
-      if (solver->velocity(i).dot(m.flight_dir) < vf) return false;
+      if ((rel - ahead * m.flight_dir).squaredNorm() < R * R) return false;
     }
+    perforation_time = last_touch;  // the last contact with the attached fabric
     return true;
   }
 
@@ -202,9 +225,8 @@ struct Simulation::Impl {
         return false;
       }
     }
-    if (n % 16 == 0 || solver->time() >= model().end_time) {
+    if (n % 16 == 0 || solver->time() >= end_time) {
       if (perforation_confirmed()) {
-        perforation_time = solver->last_contact_time();
         finish(RunStatus::completed, EndReason::perforated, "the projectile passed through the fabric");
         return false;
       }
@@ -225,8 +247,10 @@ struct Simulation::Impl {
         return false;
       }
     }
-    if (solver->time() >= model().end_time - 0.5 * model().dt) {
-      finish(RunStatus::completed, EndReason::end_time, "reached solver.end_time_us before perforation or rebound");
+    if (solver->time() >= end_time - 0.5 * model().dt) {
+      finish(RunStatus::completed, EndReason::end_time,
+             std::string("reached ") + (scene.solver.end_time_auto ? "solver.max_end_time_us" : "solver.end_time_us") +
+                 " before perforation or rebound");
       return false;
     }
     return true;
@@ -260,6 +284,7 @@ Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   impl_->solver->set_simd(scene.solver.simd);
   impl_->solver->set_max_balance_error(scene.solver.max_balance_error);
   impl_->sample_every = std::max<long>(1, std::lround(scene.output.history_interval_s / m.dt));
+  impl_->end_time = m.end_time;
   impl_->warnings = scene.warnings;
   impl_->history.push_back(impl_->sample());
 }
@@ -285,6 +310,21 @@ void Simulation::run(const std::atomic<bool>* interrupt, const std::function<voi
     }
   }
   impl_->wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+bool Simulation::extend_to(double end_time_s) {
+  Impl& I = *impl_;
+  if (I.status != RunStatus::completed || I.reason != EndReason::end_time || end_time_s <= I.end_time) return false;
+  I.end_time = end_time_s;
+  I.status = RunStatus::running;
+  I.reason = EndReason::none;
+  I.diagnosis.clear();
+  ++I.extensions;
+  return true;
+}
+
+double Simulation::end_time_s() const {
+  return impl_->end_time;
 }
 
 void Simulation::interrupt(const std::string& why) {
@@ -394,9 +434,16 @@ Summary Simulation::summary() const {
         " (from t = " + fmt("%.4g", d.balance_drift_time * 1e6) + " us; worst " + fmt("%.2g", 100 * I.worst_balance) +
         " %) slowly, not by an instability: the discretisation error of a long run with many breaks "
         "at this time step; lower solver.dt_factor to reduce it");
-  if (I.reason == EndReason::end_time)
-    s.warnings.push_back("the run reached solver.end_time_us = " + fmt("%.4g", m.end_time * 1e6) +
-                         " us undecided (neither perforated nor stopped); raise solver.end_time_us");
+  if (I.reason == EndReason::end_time) {
+    if (I.scene.solver.end_time_auto || I.extensions > 0)
+      s.warnings.push_back(
+          "the run reached its end time cap, solver.max_end_time_us = " + fmt("%.4g", I.end_time * 1e6) +
+          " us, undecided (neither perforated nor stopped); raise solver.max_end_time_us");
+    else
+      s.warnings.push_back("the run reached solver.end_time_us = " + fmt("%.4g", I.end_time * 1e6) +
+                           " us undecided (neither perforated nor stopped); set solver.end_time_us = \"auto\" to run "
+                           "until it decides, or raise it");
+  }
   return s;
 }
 

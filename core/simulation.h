@@ -84,6 +84,12 @@ class Simulation {
   // Run until done, or until `interrupt` becomes true. `on_sample` is called after each
   // history sample (progress display).
   void run(const std::atomic<bool>* interrupt = nullptr, const std::function<void(const Simulation&)>& on_sample = {});
+  // A run that ended at its end time undecided (neither perforated nor stopped) goes on to
+  // a later end time: run() continues it. Returns false (and changes nothing) for any other
+  // state. Studies use it so that no undecided run counts as stopped (SPEC §8).
+  bool extend_to(double end_time_s);
+  // The end time the run goes to (the model's, or the latest extend_to).
+  double end_time_s() const;
   // Mark the run interrupted (Ctrl-C) and finish the summary.
   void interrupt(const std::string& why);
 

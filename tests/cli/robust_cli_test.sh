@@ -51,14 +51,11 @@ expect_exit 3 "the projectile left the domain" -- "$ravel" run "${small[@]}" --s
 expect_fault "$tmp/left" projectile_left_domain any
 expect_exit 3 "the nearest-pair search lost track" -- env RAVEL_TEST_FAULT=search_lost@10 "$ravel" run "${small[@]}" --out "$tmp/lost"
 expect_fault "$tmp/lost" search_lost 11
-# ... with the check off (1) the same break is only a warning: the run "completes" with
-# yarns broken by the scrambled contact and a percent-level hole in the energy ledger,
-# a wrong answer nothing else flags: what the check is for.
+# ... with the check off (1) the same break is only a warning: the run "completes" with a
+# scrambled contact state, which only the warning reports: what the check is for.
 expect_exit 0 "nearest-pair search: yarns slid more than one node" -- env RAVEL_TEST_FAULT=search_lost@10 \
   "$ravel" run "${small[@]}" --set solver.max_search_lost=1 --set solver.end_time_us=3 --out "$tmp/lost_off"
 [ "$(json "$tmp/lost_off/summary.json" status)" = '"completed"' ] && ok || bad "lost_off: status"
-awk -v e="$(json "$tmp/lost_off/summary.json" energy_balance_error)" 'BEGIN { exit !(e > 0.01) }' && ok ||
-  bad "lost_off: energy_balance_error $(json "$tmp/lost_off/summary.json" energy_balance_error), expected > 1 %"
 expect_exit 2 "unknown fault" -- env RAVEL_TEST_FAULT=gremlins@1 "$ravel" run "${small[@]}" --out "$tmp/gremlins"
 
 # --- Interrupted runs: SIGINT and SIGTERM both write everything with status interrupted.

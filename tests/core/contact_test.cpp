@@ -142,6 +142,52 @@ TEST(Friction, FollowsCoulombsLaw) {
   }
 }
 
+// Transverse compression (docs/MODEL.md §4): a crossing pressed with a normal force N
+// settles where the hyperbolic law puts it, c(N) = c_min + (D - c_min) / (1 + N / F_half),
+// and the ledger's compression_J is the law's integral from c to D. The implicit update
+// solves the law exactly at the end of each step, so once the pressed warp has settled
+// (its ringing dies out through the update's own dissipation) the only differences are the
+// free flight within a step (N dt^2 / m: nanometres) and rounding: 1e-3 of the compressible
+// distance bounds both. The settled normal force is N (a static balance), to the same order.
+TEST(Compression, PressedCrossingClosesByTheLawAndStoresItsIntegral) {
+  const double cmin = 0.1e-3, Fh = 1.0, span = kL1 - cmin;
+  for (double N : {0.3, 1.0, 3.0, 10.0}) {
+    SCOPED_TRACE("N = " + std::to_string(N) + " N");
+    Model m = crossing_pair(0.0, 5, true);
+    m.compression = CrossingCompression::hyperbolic;
+    m.crossings[0].flattened_distance = cmin;
+    m.crossings[0].compression_force = Fh;
+    auto s = make_solver(m, Precision::double_precision, 1);
+    // The warp's middle node is pressed onto the weft with a force ramped up over 150 us (a
+    // sudden load would ring the undamped elastic chain for far longer than the test runs).
+    while (s->time() < 250e-6) {
+      s->set_external_force(2, Vec3d(0, 0, -N * std::min(1.0, s->time() / 150e-6)));
+      s->step();
+    }
+    // crossing_gap is measured before the step's correction, after the free flight has
+    // pressed the pair together by up to N dt^2 / m (the warp node alone): within that, and
+    // 1e-3 of the compressible distance, the law.
+    const double c = kL1 + s->crossing_gap(0);
+    const double expect = cmin + span / (1 + N / Fh);
+    EXPECT_NEAR(c, expect, N * m.dt * m.dt / kMass + 1e-3 * span);
+    EXPECT_NEAR(s->crossing_normal_force(0), N, 1e-3 * N);
+    // The stored energy is the law's at the distance the correction enforced.
+    const double se = expect - cmin, stored = Fh * (span * std::log(span / se) - (span - se));
+    EXPECT_NEAR(s->ledger().compression_J, stored, 1e-3 * stored);
+    EXPECT_GE(s->ledger().compression_loss_J, 0.0);  // the implicit update only dissipates
+  }
+}
+
+// The same press on a rigid crossing keeps the rest distance D, whatever the force.
+TEST(Compression, RigidCrossingKeepsItsDistance) {
+  Model m = crossing_pair(0.0, 5, true);
+  auto s = make_solver(m, Precision::double_precision, 1);
+  s->set_external_force(2, Vec3d(0, 0, -10.0));
+  while (s->time() < 100e-6) s->step();
+  EXPECT_NEAR(kL1 + s->crossing_gap(0), kL1, 10.0 * m.dt * m.dt / kMass + 1e-4 * kL1);
+  EXPECT_EQ(s->ledger().compression_J, 0.0);
+}
+
 // The normal correction moves the two contact points apart along d with equal and
 // opposite impulses on one line through both: starting at rest with the yarns pushed into
 // each other, the pair flies apart with zero total linear and angular momentum.
@@ -195,10 +241,13 @@ TEST(Contact, SplitRemovesOldPenetrationWithoutVelocity) {
   EXPECT_NEAR(closest, kL1, 1e-2 * kL1);
 }
 
-// After every step no crossing is left interpenetrating by more than a fraction of D.
-// One Jacobi pass resolves each crossing exactly; what is left comes from neighbouring
-// crossings sharing a node: about 13 um at worst here, bounded at 10 % of D (20 um)
-// through impact, failure and perforation.
+// After every step no crossing is left interpenetrating by more than a fraction of D (below
+// the flattened distance c_min for compressible crossings: what the law forbids). One Jacobi
+// pass resolves each crossing exactly (the compression's paced shift leaves at most 5 % of
+// c_min, 5 um); what is left comes from neighbouring crossings sharing a node: about 6 um at
+// worst here (9 um rigid), bounded at 10 % of D (20 um) through impact, failure and
+// perforation. (Before the pacing was bounded, a crossing overrun by a snapping broken end
+// was left 0.24 mm deep: through its partner.)
 TEST(Contact, InterpenetrationAfterEachStepIsBounded) {
   Simulation sim(test::scene_with(test::small_patch() + std::vector<std::string>{"projectile.velocity_mps=300"}));
   sim.run();
@@ -209,30 +258,31 @@ TEST(Contact, InterpenetrationAfterEachStepIsBounded) {
 }
 
 // Very large mu: (almost) nothing slides, and the answer moves towards the pin-jointed
-// model's. Only crossings that barely touch (f_n near 0, so mu f_n / K is sub-nanometre)
-// can still slip. The robust measure of the answer is the damage to the clamped (weft)
-// yarns: when crossings cannot slide, load concentrates under the projectile and many more
-// of them break, as in the pin-jointed network (measured on this patch: 13 broken weft
-// yarns at mu = 0.2 and 1, 21 at mu = 3, 25 at mu = 10, 43 pin-jointed).
+// model's. Coulomb: the stuck points move only where mu f_n is exceeded, so the total slip
+// of the crossings before failure (30 us) at mu = 10 is a small fraction of mu = 0.2's (only
+// crossings that barely touch, f_n near 0, can still slip). The robust measure of the answer
+// is the damage to the clamped (weft) yarns: when crossings cannot slide, load concentrates
+// under the projectile as in the pin-jointed network.
 TEST(Friction, VeryLargeMuSticksAndApproachesPinJointed) {
-  const std::vector<std::string> base{"fabric.width_mm=36",  "fabric.length_mm=36",         "projectile.diameter_mm=6",
-                                      "projectile.mass_g=2", "projectile.velocity_mps=200", "solver.end_time_us=150"};
-  auto count = [&](const char* mu, long& sliding, long& stuck) {
+  const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
+                                      "projectile.mass_g=2", "projectile.velocity_mps=200"};
+  auto run = [&](const char* mu, double& slip) {
     Simulation sim(test::scene_with(base + std::vector<std::string>{mu}));
-    sliding = stuck = 0;
+    const Solver& so = sim.solver();
+    const int nc = int(so.model().crossings.size());
+    slip = 0;
     while (!sim.finished()) {
       sim.step();
       if (sim.time_s() > 30e-6) continue;  // before failure starts releasing crossings
-      sliding += sim.solver().sliding_crossings();
-      stuck += sim.solver().stuck_crossings();
+      for (int c = 0; c < nc; ++c) slip += so.crossing_slip_rate(c) * so.model().dt;
     }
     return sim.summary();
   };
-  long slide_big, stuck_big, slide_mid, stuck_mid;
-  const Summary s_big = count("yarn.friction=10", slide_big, stuck_big);
-  const Summary s_mid = count("yarn.friction=0.2", slide_mid, stuck_mid);
-  EXPECT_LT(slide_big, 0.05 * stuck_big) << slide_big << " sliding, " << stuck_big << " stuck";
-  EXPECT_LT(slide_big, 0.2 * slide_mid) << slide_big << " vs " << slide_mid << " at mu = 0.2";
+  double slip_big, slip_mid;
+  const Summary s_big = run("yarn.friction=10", slip_big);
+  const Summary s_mid = run("yarn.friction=0.2", slip_mid);
+  EXPECT_GT(slip_mid, 0.0);
+  EXPECT_LT(slip_big, 0.05 * slip_mid) << slip_big << " m of slip at mu = 10 vs " << slip_mid << " at mu = 0.2";
   const Summary s_pin = test::simulate(test::scene_with(base + std::vector<std::string>{"solver.model=pin_jointed"}));
   EXPECT_LT(std::abs(s_big.broken_weft_yarns - s_pin.broken_weft_yarns),
             std::abs(s_mid.broken_weft_yarns - s_pin.broken_weft_yarns))
@@ -243,17 +293,20 @@ TEST(Friction, VeryLargeMuSticksAndApproachesPinJointed) {
 // The classic yarn pull-out test: a 10 x 10 mm patch held at its left and right edges (the
 // weft ends), the projectile parked far away, the central warp pulled out at its top end
 // at 10 m/s through a stiff spring (booked as external work). The force (mean over 50 us
-// windows) rises while the crossings hold, peaks in the first few mm, and drops to nearly
-// nothing as the yarn's tail passes the crossings and they let go. Even mu = 0 resists a
-// little (the crimp has to straighten the crossing wefts); the peak grows with mu.
+// windows) rises while the crossings hold, peaks in the first few mm, and falls as the
+// yarn's tail passes the crossings and they let go. Alongside, the normal forces of the
+// pulled yarn's crossings (Eq 11) are summed over the same windows: their ratio, the
+// lateral resistance, is what friction and the crimp interlock make of the crossings' grip.
 struct PullOut {
   double peak_N = 0, peak_at_mm = 0, last_N = 0;
+  double resistance = 0;  // pull force / sum of the pulled yarn's normal forces, over the first 2 mm
   int released = 0, crossings = 0;
+  double crimp_slope = 0;  // rest crossing distance over the in-plane node spacing: c0 / L0
 };
-PullOut pull_out(double mu) {
-  Scene sc =
-      test::scene_with({"fabric.width_mm=10", "fabric.length_mm=10", "solver.symmetry=full", "yarn.breakable=false",
-                        "projectile.diameter_mm=2", "projectile.mass_g=0.1", "yarn.friction=" + std::to_string(mu)});
+PullOut pull_out(double mu, const char* compression = "fabric.crossing_compression=hyperbolic") {
+  Scene sc = test::scene_with({"fabric.width_mm=10", "fabric.length_mm=10", "solver.symmetry=full",
+                               "yarn.breakable=false", "projectile.diameter_mm=2", "projectile.mass_g=0.1",
+                               "yarn.friction=" + std::to_string(mu), compression});
   Simulation sim(sc);
   Solver& so = sim.solver();
   const Model& m = so.model();
@@ -261,10 +314,13 @@ PullOut pull_out(double mu) {
   so.set_projectile_velocity(Vec3d::Zero());
   so.set_max_balance_error(1e30);  // the ledger's reference (the projectile's energy) is gone
   const int y = m.warp_count / 2, end = m.yarn_node(y, m.yarn_size(y) - 1);
+  std::vector<int> mine;
+  for (size_t c = 0; c < m.crossings.size(); ++c)
+    if (m.crossings[c].warp_yarn == y) mine.push_back(int(c));
   const Vec3d x0 = so.position(end);
-  const double V = 10, k = 2e5, pull = 10e-3;
+  const double V = 10, k = 2e5, pull = 14e-3;
   PullOut r;
-  double acc = 0, t = 0;
+  double acc = 0, t = 0, pulled = 0, gripped = 0;
   long cnt = 0;
   std::vector<double> windows;
   while (t < pull / V) {
@@ -273,6 +329,11 @@ PullOut pull_out(double mu) {
     so.step();
     t = so.time();
     acc += F.y();
+    if (V * t < 2e-3) {
+      double n = 0;
+      for (int c : mine) n += so.crossing_normal_force(c);
+      pulled += F.y(), gripped += n;
+    }
     if (++cnt == long(50e-6 / m.dt)) {
       windows.push_back(acc / double(cnt));
       if (windows.back() > r.peak_N) r.peak_N = windows.back(), r.peak_at_mm = V * t * 1e3;
@@ -281,8 +342,13 @@ PullOut pull_out(double mu) {
   }
   EXPECT_TRUE(so.divergence().empty()) << so.divergence();
   r.last_N = windows.back();
-  for (size_t c = 0; c < m.crossings.size(); ++c)
-    if (m.crossings[c].warp_yarn == y) ++r.crossings, r.released += !so.crossing_active(int(c));
+  r.resistance = gripped > 0 ? pulled / gripped : 0;
+  r.crossings = int(mine.size());
+  const Vec3d a = m.x0[m.yarn_node(y, 0)], b = m.x0[m.yarn_node(y, 1)];
+  r.crimp_slope = m.crossings[mine[0]].contact_distance / std::hypot(b.x() - a.x(), b.y() - a.y());
+  // Let go: released, or (a crossing whose partner left past a folded free end, so that the
+  // slip-off test does not see it leave along the yarn) still tracked but pressing no more.
+  for (int c : mine) r.released += !so.crossing_active(c) || so.crossing_normal_force(c) == 0;
   return r;
 }
 
@@ -291,42 +357,84 @@ TEST(Friction, PullOutForceRisesPeaksAndDropsAndThePeakGrowsWithMu) {
   for (double mu : {0.0, 0.1, 0.2, 0.4}) {
     SCOPED_TRACE("mu " + std::to_string(mu));
     const PullOut r = pull_out(mu);
-    EXPECT_GT(r.peak_N, 1.0);                        // measured 5 N at mu = 0 .. 31 N at 0.4
-    EXPECT_LT(r.peak_at_mm, 4.0);                    // rises to the peak within the first crossings
-    EXPECT_LT(std::abs(r.last_N), 0.05 * r.peak_N);  // and drops once the yarn is out
-    EXPECT_GE(r.crossings, 10);
-    EXPECT_EQ(r.released, r.crossings);    // every crossing of the pulled yarn let go
-    EXPECT_GT(r.peak_N, 1.15 * previous);  // the peak grows with mu
+    EXPECT_LT(r.peak_at_mm, 4.0);         // the grip is strongest while every crossing still holds
+    EXPECT_EQ(r.released, r.crossings);   // every crossing of the pulled yarn let go
+    EXPECT_LT(r.last_N, 0.1 * r.peak_N);  // and the force is gone with them
+    EXPECT_GT(r.peak_N, previous);        // Coulomb: the grip grows with mu
     previous = r.peak_N;
+    // Lateral resistance (pull force over the sum of the yarn's crossing normal forces). Coulomb
+    // friction alone resists mu N, so mu is a floor. The crimp adds a geometric part: the yarn's
+    // kinks climb the partners' zig-zags, an inclined plane whose slope is at most the rest
+    // crimp slope g = c / L0 (compression only flattens it). On a plane of slope g friction and
+    // slope combine to at most (mu + g) / (1 - mu g): the ceiling.
+    const double g = r.crimp_slope, ceiling = (mu + g) / (1 - mu * g);
+    EXPECT_GE(r.resistance, mu);
+    EXPECT_LE(r.resistance, ceiling);
+    if (mu == 0) {
+      EXPECT_GT(r.resistance, 0.0);  // the interlock alone resists
+    }
   }
 }
 
-// Low friction at a low impact velocity (paper Fig. 12, 17): the projectile pushes the
-// yarns aside instead of breaking them, and the free edges ravel. At 40 m/s mu = 0.02
-// breaks nothing while mu = 0.2 breaks several clamped yarns. At 60 m/s mu = 0.02 slips
-// through (perforates) while mu = 0.2 stops the projectile, and more crossings ravel out
-// (measured 105 vs 79). (How many elements break on the way through at 60 m/s is not
-// robust: near the limit it changes with rounding.)
-TEST(Friction, LowFrictionPushesYarnsAsideAndRavels) {
-  const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
-                                      "projectile.mass_g=2", "solver.end_time_us=800"};
-  auto run = [&](const char* v, const char* mu, long& ravelled) {
-    Simulation sim(test::scene_with(base + std::vector<std::string>{v, mu}));
-    sim.run();
-    ravelled = sim.solver().diagnostics().ravelled;
-    return sim.summary();
+// Compressible crossings flatten under the pull, so the interlock a sliding yarn must climb
+// is lower than between rigid rods of diameter D (SPEC §4): the lateral resistance at mu = 0
+// falls. (Measured: 0.11 against 0.17, and the peak pull-out force 0.95 N against 5.2 N.)
+TEST(Friction, CompressionLowersTheCrimpInterlock) {
+  const PullOut soft = pull_out(0.0), rigid = pull_out(0.0, "fabric.crossing_compression=rigid");
+  EXPECT_LT(soft.resistance, 0.8 * rigid.resistance) << soft.resistance << " vs " << rigid.resistance;
+  EXPECT_LT(soft.peak_N, rigid.peak_N);
+}
+
+// Low friction at 260 m/s (paper Fig. 12, 14): the primary yarns slip aside off the
+// projectile instead of holding it. Of the yarns it struck first (touching at 10 us), those
+// not touching it at 40 us and not broken have slipped off: at mu = 0 most of them, at
+// mu = 0.2 the ones that leave it break first. The projectile is hardly slowed at mu = 0: the
+// patch absorbs far less (paper Fig. 13; measured 4.2 J against 10.5 J). On a 40 mm patch
+// struck by a 6 mm sphere of the default scene's mass per presented area.
+struct SlipOff {
+  int struck = 0, slipped = 0;  // (modelled part) yarns touching at 10 us; of those, gone unbroken by 40 us
+  Summary summary;
+};
+SlipOff slip_off(const char* mu) {
+  Simulation sim(test::scene_with(
+      {"fabric.width_mm=40", "fabric.length_mm=40", "projectile.diameter_mm=6", "projectile.mass_g=1.75", mu}));
+  const Solver& so = sim.solver();
+  const Model& m = so.model();
+  std::vector<int> node_yarn(m.node_count);
+  for (int y = 0; y < m.yarn_count(); ++y)
+    for (int k = 0; k < m.yarn_size(y); ++k) node_yarn[m.yarn_node(y, k)] = y;
+  auto touching = [&] {
+    std::vector<char> on(m.yarn_count(), 0);
+    for (int i = 0; i < m.node_count; ++i) {
+      Vec3d nrm;
+      if (m.shape.sdf(Vec3d(so.position(i) - so.projectile_position()), nrm) < 1e-6) on[node_yarn[i]] = 1;
+    }
+    return on;
   };
-  long r_low, r_mid;
-  const Summary low = run("projectile.velocity_mps=40", "yarn.friction=0.02", r_low);
-  const Summary mid = run("projectile.velocity_mps=40", "yarn.friction=0.2", r_mid);
-  EXPECT_EQ(low.broken_warp + low.broken_weft, 0);
-  EXPECT_GE(mid.broken_weft_yarns, 3);
-  EXPECT_GE(r_low, 10);  // with nothing broken, every release is at a free edge
-  const Summary low60 = run("projectile.velocity_mps=60", "yarn.friction=0.02", r_low);
-  const Summary mid60 = run("projectile.velocity_mps=60", "yarn.friction=0.2", r_mid);
-  EXPECT_TRUE(low60.perforated);
-  EXPECT_FALSE(mid60.perforated);  // at 61 m/s it just perforates: 16 m/s against 36 for mu = 0.02
-  EXPECT_GT(r_low, r_mid) << r_low << " vs " << r_mid;
+  test::run_until(sim, 10e-6);
+  const std::vector<char> first = touching();
+  test::run_until(sim, 40e-6);
+  const std::vector<char> later = touching();
+  std::vector<char> broken(m.yarn_count(), 0);
+  for (int e = 0; e < m.element_count; ++e) broken[m.elem_yarn[e]] |= so.broken(e);
+  SlipOff r;
+  for (int y = 0; y < m.yarn_count(); ++y) {
+    r.struck += first[y];
+    r.slipped += first[y] && !later[y] && !broken[y];
+  }
+  sim.run();
+  r.summary = sim.summary();
+  return r;
+}
+
+TEST(Friction, LowFrictionYarnsSlipOffTheProjectile) {
+  const SlipOff low = slip_off("yarn.friction=0"), mid = slip_off("yarn.friction=0.2");
+  ASSERT_GT(low.struck, 2);
+  EXPECT_GE(2 * low.slipped, low.struck) << low.slipped << " of " << low.struck << " slipped off at mu = 0";
+  EXPECT_LT(mid.slipped, low.slipped) << mid.slipped << " of " << mid.struck << " at mu = 0.2";
+  EXPECT_LT(low.summary.broken_weft_yarns + low.summary.broken_warp_yarns,
+            mid.summary.broken_weft_yarns + mid.summary.broken_warp_yarns);
+  EXPECT_LT(low.summary.energy_absorbed_J, 0.5 * mid.summary.energy_absorbed_J);
 }
 
 }  // namespace

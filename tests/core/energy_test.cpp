@@ -29,12 +29,21 @@ TEST(Energy, LedgerBalancesThroughImpactAndRebound) {
     sim.run();
     const Summary s = sim.summary();
     EXPECT_EQ(s.end_reason, EndReason::rebounded) << model;
-    EXPECT_LT(s.energy_balance_error, 5e-3) << model;
-    // Contact corrections are inelastic; the position shifts that remove penetration left
-    // from earlier steps (solver.split_penetration) push against yarn tension and are
-    // booked as energy put in: small either way.
+    // The sliding model's crossings compress and spring back (implicitly, booked by its own
+    // terms) and its slack yarn ends snap taut: at dt_factor 0.5 the truncation error reaches
+    // a few 1e-3 of the impact energy by the rebound; 1 % bounds it (it falls as dt^2, below).
+    EXPECT_LT(s.energy_balance_error, 1e-2) << model;
+    // The normal corrections are inelastic velocity changes: they can only take kinetic
+    // energy out, so contact_loss_J never falls below zero (to rounding of the work sums).
+    // The position shifts that remove penetration left from earlier steps are booked apart
+    // (shift_work_J) because their sign is not fixed: mostly they move yarns apart against the
+    // tension that pressed them together (energy in), but a shift that undoes a neighbouring
+    // crossing's correction on a shared node can move it either way. Booked together, as they
+    // once were, a negative sum hid inside contact_loss_J.
+    const double e0 = sim.history().front().ledger.total();
+    for (const HistoryRow& r : sim.history())
+      EXPECT_GE(r.ledger.contact_loss_J, -1e-12 * e0) << model << " at " << r.t_s;
     const Ledger& l = sim.history().back().ledger;
-    EXPECT_LT(std::abs(l.contact_loss_J), 0.02 * sim.history().front().ledger.total()) << model;
     EXPECT_EQ(l.viscous_J, 0.0);
     EXPECT_EQ(l.released_J, 0.0);
   }

@@ -122,16 +122,13 @@ TEST(Fault, NearestPairSearchLostAtManyCrossingsDiverges) {
 
 TEST(Fault, SearchLostThresholdIsASceneKey) {
   // With the check off (1), the same break is only a warning: the run goes on and ends
-  // "completed", with yarns broken by the scrambled contact and a percent-level hole in
-  // the energy ledger that no other check flags: what the check is for.
+  // "completed", its contact state no longer the model's (the warning says where).
   Simulation sim(patch({"solver.max_search_lost=1", "solver.end_time_us=3"}));
   for (int i = 0; i < 10; ++i) sim.step();
   shift_weft_yarns(sim);
   sim.run();
   const Summary s = sim.summary();
   EXPECT_EQ(s.status, RunStatus::completed) << s.diagnosis;
-  EXPECT_GT(s.energy_balance_error, 0.01);
-  EXPECT_GT(s.broken_warp + s.broken_weft, 0);
   bool warned = false;
   for (const auto& w : s.warnings)
     warned |= w.find("nearest-pair search: yarns slid more than one node") != std::string::npos;

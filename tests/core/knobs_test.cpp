@@ -70,24 +70,31 @@ TEST(Precision, FloatAgreesWithDouble) {
               0.01 * d.summary().residual_velocity_mps);
 }
 
-// Lumping k yarns into one converges towards the fine mesh as k -> 1: the projectile
-// velocity and the fabric's kinetic and stored energy at 60 us (no failure) approach those
-// of k = 1 monotonically.
-TEST(Coarsening, ConvergesAsKGoesToOne) {
+// Lumping k yarns into one (fabric.yarns_per_element) is a coarser mesh, h = k L0, of the same
+// fabric: the projectile's speed at 60 us (no failure) converges as k -> 1 like C h^p. Fitting
+// v = v1 + C (k^p - 1) to k = 2, 3, 4 alone must predict the fine mesh k = 1: p at least first
+// order (the contact footprint is resolved to h; measured p = 1.5) and the prediction within a
+// quarter of the k = 2 error (measured 0.004 m/s against 0.20 m/s). A lumped mesh that drifted
+// to another fabric (as before the crimp angle was kept) fails the prediction.
+TEST(Coarsening, CoarseMeshesExtrapolateToTheFineOne) {
   const std::vector<std::string> base{"fabric.width_mm=60", "fabric.length_mm=60", "projectile.velocity_mps=150",
                                       "solver.end_time_us=60", "yarn.breakable=false"};
-  double v[5], ke[5];
+  double v[5];
   for (int k = 1; k <= 4; ++k) {
     Simulation sim(test::scene_with(base + std::vector<std::string>{"fabric.yarns_per_element=" + std::to_string(k)}));
     sim.run();
     v[k] = sim.history().back().projectile_velocity_mps;
-    ke[k] = sim.history().back().ledger.fabric_ke_J;
   }
-  for (int k = 2; k < 4; ++k) {
-    EXPECT_LT(std::abs(v[k] - v[1]), std::abs(v[k + 1] - v[1])) << "k = " << k;
-    EXPECT_LT(std::abs(ke[k] - ke[1]), std::abs(ke[k + 1] - ke[1])) << "k = " << k;
-  }
-  EXPECT_GT(std::abs(v[2] - v[1]), 0.0);
+  const double d23 = v[3] - v[2], d34 = v[4] - v[3];
+  ASSERT_GT(d23 * d34, 0.0) << "not monotone in k";
+  // (4^p - 3^p) / (3^p - 2^p) grows with p: bisect for the measured ratio.
+  auto ratio = [](double p) { return (std::pow(4.0, p) - std::pow(3.0, p)) / (std::pow(3.0, p) - std::pow(2.0, p)); };
+  double lo = 0.05, hi = 6;
+  for (int i = 0; i < 100; ++i) (ratio(0.5 * (lo + hi)) < d34 / d23 ? lo : hi) = 0.5 * (lo + hi);
+  const double p = 0.5 * (lo + hi), C = d23 / (std::pow(3.0, p) - std::pow(2.0, p));
+  const double predicted = v[2] - C * (std::pow(2.0, p) - 1);
+  EXPECT_GE(p, 1.0);
+  EXPECT_NEAR(predicted, v[1], 0.25 * std::abs(v[2] - v[1])) << "p " << p;
 }
 
 }  // namespace

@@ -105,10 +105,12 @@ TEST(SceneValidation, FailureStrainBeyondTheMaterialModel) {
 TEST(SceneValidation, RunsNoMachineFinishesAreRefused) {
   // k1 given in GPa: the wave speed is 0.2 m/s, one step is longer than the run.
   EXPECT_HAS(
-      error_of("[yarn]\nk1_pa = 72.8\n"),
+      error_of("[yarn]\nk1_pa = 72.8\n[solver]\nend_time_us = 150\n"),
       "test.toml:2: yarn.k1_pa: one time step (dt = alpha L0 / c = 1.88e+03 us, wave speed c = 0.225 m/s) is longer "
       "than the run (solver.end_time_us = 150)");
-  EXPECT_HAS(error_of("[yarn]\nk1_pa = 72.8\n"), "it looks like a value in GPa");
+  EXPECT_HAS(error_of("[yarn]\nk1_pa = 72.8\n[solver]\nend_time_us = 150\n"), "it looks like a value in GPa");
+  // With the auto end, the run's length is its cap, which must hold at least 100 steps.
+  EXPECT_HAS(error_of("[yarn]\nk1_pa = 72.8\n"), "is longer than the run (solver.max_end_time_us = 5e+03)");
   // A modulus far too large: billions of steps.
   EXPECT_HAS(error_of("", {"yarn.material=elastic", "yarn.modulus_pa=1e30", "solver.end_time_us=1000"}),
              "yarn.modulus_pa: this scene would need about");

@@ -88,7 +88,7 @@ TEST(RenderRun, UnperforatedRunShowsNoHole) {
 }
 
 TEST(RenderRun, StrainedRegionColourDiffersFromUnstrained) {
-  const Frame f = run_default({}, 20.0, nullptr);
+  const Frame f = run_default({}, 30.0, nullptr);
   const int w = 480, h = 360;
   const ViewOptions o = fabric_only(ViewPreset::top);
   const Camera c = render::fitted_camera(f, ViewPreset::top, float(w) / h);

@@ -1,0 +1,70 @@
+// Outcomes of a run (SPEC §8, docs/MODEL.md §8): perforation needs the projectile to have
+// passed through the fabric, so a caught projectile is never reported as perforated; the
+// ledger's friction term is a dissipation; the state hashes are the recorded ones.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fixture.h"
+#include "hash_probe.h"
+
+namespace ravel {
+namespace {
+
+using test::operator+;
+
+// A projectile the fabric catches, light (kg typed for g: 0.007 g) or slow, ends rebounded,
+// never perforated: with nothing broken the fabric is still ahead of it.
+TEST(Perforation, ACaughtProjectileIsNeverPerforated) {
+  for (const char* what : {"projectile.mass_g=0.007", "projectile.velocity_mps=20"}) {
+    SCOPED_TRACE(what);
+    const Summary s = test::simulate(test::scene_with(
+        {"fabric.width_mm=40", "fabric.length_mm=40", "projectile.diameter_mm=6", "projectile.mass_g=1.75", what}));
+    EXPECT_FALSE(s.perforated) << s.diagnosis;
+    EXPECT_EQ(s.end_reason, EndReason::rebounded) << s.diagnosis;
+    EXPECT_EQ(s.broken_warp + s.broken_weft, 0);
+  }
+}
+
+// friction_work_J is the work of the friction impulses less the energy the stick penalty
+// springs hold (docs/MODEL.md §4): a dissipation, never below zero (to rounding: 1e-6 of the
+// impact energy covers the half-step timing of the springs' energy), whatever mu.
+TEST(Friction, WorkIsDissipation) {
+  for (const char* mu : {"yarn.friction=0.2", "yarn.friction=1"}) {
+    SCOPED_TRACE(mu);
+    Simulation sim(test::scene_with(
+        {"fabric.width_mm=40", "fabric.length_mm=40", "projectile.diameter_mm=6", "projectile.mass_g=1.75", mu}));
+    sim.run();
+    const double e0 = sim.history().front().ledger.total();
+    double stick_max = 0;
+    for (const HistoryRow& r : sim.history()) {
+      EXPECT_GE(r.ledger.friction_work_J, -1e-6 * e0) << r.t_s;
+      EXPECT_GE(r.ledger.stick_energy_J, 0.0) << r.t_s;
+      stick_max = std::max(stick_max, r.ledger.stick_energy_J);
+    }
+    EXPECT_GT(stick_max, 0.0);
+    EXPECT_GT(sim.history().back().ledger.friction_work_J, 0.0);
+    EXPECT_LT(sim.summary().energy_balance_error, 5e-3);
+  }
+}
+
+// The hash probe (bench/hash_probe): the state hash of a fixed set of scenes after a fixed
+// number of steps. A change that should move no number must leave these the same; a change
+// that moves them updates them in its own commit, saying why.
+TEST(HashProbe, StateHashesAreTheRecordedOnes) {
+  const std::vector<std::pair<std::string, std::uint64_t>> expect = {
+#include "hash_probe_expected.inc"
+  };
+  for (const auto& [name, hash] : expect) {
+    bool found = false;
+    for (const auto& c : probe_cases()) {
+      if (c.name != name) continue;
+      found = true;
+      EXPECT_EQ(run_probe(c).hash, hash) << name;
+    }
+    EXPECT_TRUE(found) << name;
+  }
+}
+
+}  // namespace
+}  // namespace ravel
