@@ -67,7 +67,7 @@ bool progress_wanted(const CommonArgs& a) {
 
 int cmd_sweep(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"vary", "jobs", "shard"}, {"quiet"}, {"vary"});
+    CommonArgs a = parse_args(args, {"vary", "jobs", "shard"}, {"quiet", "no-extend"}, {"vary"});
     if (!a.multi.count("vary"))
       throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
     check_out_dir(a.out_dir);
@@ -78,6 +78,7 @@ int cmd_sweep(const Args& args) {
     opt.out_dir = a.out_dir;
     opt.jobs = jobs_from(a);
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
+    opt.extend_undecided = !has_switch(a, "no-extend");
     if (a.flags.count("shard")) opt.shard = studies::parse_shard(a.flags["shard"]);
     std::vector<studies::Vary> vary;
     std::vector<std::string> keys;
@@ -150,9 +151,11 @@ int cmd_limit(const Args& args) {
     auto logged = [&](double v, const std::string& why) {
       const auto s = shoot(v, why);
       if (verbose) {
-        std::printf("  %-7s %8.2f m/s: %s", why.c_str(), v, s.perforated ? "perforated" : "stopped");
+        std::printf("  %-7s %8.2f m/s: %s", why.c_str(), v,
+                    s.perforated ? "perforated"
+                    : s.decided  ? "stopped"
+                                 : "undecided at its end time (left out)");
         if (s.perforated) std::printf(", residual %.1f m/s", s.residual_velocity_mps);
-        if (!s.decided) std::printf(" (undecided at end time)");
         if (s.failed) std::printf(" -- FAILED: %s", s.error.c_str());
         std::printf("  [%.1f s]\n", s.wall_time_s);
         std::fflush(stdout);
@@ -160,8 +163,8 @@ int cmd_limit(const Args& args) {
       return s;
     };
     if (verbose)
-      std::printf("limit: %s, tolerance %.3g m/s, end time %.0f us\n", scene.name.c_str(), lo.tolerance_mps,
-                  scene.solver.end_time_s * 1e6);
+      std::printf("limit: %s, tolerance %.3g m/s, runs end at perforation or rebound (at most %.0f us)\n",
+                  scene.name.c_str(), lo.tolerance_mps, scene.solver.max_end_time_s * 1e6);
     studies::LimitResult r;
     try {
       r = studies::find_ballistic_limit(logged, lo, !has_switch(a, "no-fit"));

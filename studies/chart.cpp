@@ -134,6 +134,10 @@ void chart_ranges(const Chart& chart, double* x0, double* x1, double* y0, double
       xh = std::max(xh, s.x[i]);
       yl = std::min(yl, s.y[i]);
       yh = std::max(yh, s.y[i]);
+      if (s.has_error_bars()) {
+        if (drawable(chart.y, s.y_lo[i])) yl = std::min(yl, s.y_lo[i]);
+        if (drawable(chart.y, s.y_hi[i])) yh = std::max(yh, s.y_hi[i]);
+      }
     }
   axis_range(chart.x, xl, xh, x0, x1);
   axis_range(chart.y, yl, yh, y0, y1);
@@ -306,6 +310,12 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
       }
       run.push_back({px(s.x[i]), py(s.y[i])});
       if (s.style != SeriesStyle::line) p.marker(px(s.x[i]), py(s.y[i]), std::max(2.5, fs / 3.5), c);
+      if (s.has_error_bars() && drawable(chart.y, s.y_lo[i]) && drawable(chart.y, s.y_hi[i])) {
+        const double xb = px(s.x[i]), cap = 0.4 * fs, w = std::max(1.2, fs / 9);
+        p.line(xb, py(s.y_lo[i]), xb, py(s.y_hi[i]), c, w, false);
+        p.line(xb - cap, py(s.y_lo[i]), xb + cap, py(s.y_lo[i]), c, w, false);
+        p.line(xb - cap, py(s.y_hi[i]), xb + cap, py(s.y_hi[i]), c, w, false);
+      }
     }
     flush();
     p.end_series();
@@ -569,12 +579,24 @@ std::string chart_csv(const Chart& chart) {
       }
     return out;
   }
-  std::string out = "series," + quote(chart.x.title()) + "," + quote(chart.y.title()) + "\n";
-  char buf[64];
+  bool bars = false;
+  for (const auto& s : chart.series) bars = bars || s.has_error_bars();
+  std::string out =
+      "series," + quote(chart.x.title()) + "," + quote(chart.y.title()) + (bars ? ",low,high" : "") + "\n";
+  char buf[96];
   for (const auto& s : chart.series)
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      std::snprintf(buf, sizeof buf, ",%.9g,%.9g\n", s.x[i], s.y[i]);
+      std::snprintf(buf, sizeof buf, ",%.9g,%.9g", s.x[i], s.y[i]);
       out += quote(s.name) + buf;
+      if (bars) {
+        if (s.has_error_bars())
+          std::snprintf(buf, sizeof buf, ",%.9g,%.9g\n", s.y_lo[i], s.y_hi[i]);
+        else
+          std::snprintf(buf, sizeof buf, ",,\n");
+        out += buf;
+      } else {
+        out += "\n";
+      }
     }
   return out;
 }

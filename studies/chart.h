@@ -22,6 +22,10 @@ struct Series {
   SeriesStyle style = SeriesStyle::line_markers;
   int color = -1;  // index into the palette; -1 = the series' position
   bool dashed = false;
+  // Optional error bars: the interval [y_lo[i], y_hi[i]] drawn as a capped vertical bar at
+  // x[i] (empty: none; non-finite ends: no bar at that point).
+  std::vector<double> y_lo = {}, y_hi = {};
+  bool has_error_bars() const { return !y_lo.empty() && y_lo.size() == x.size() && y_hi.size() == x.size(); }
 };
 
 struct Axis {
@@ -100,7 +104,8 @@ std::string chart_svg(const Chart& chart, int width = 900, int height = 600);
 // RGB pixels, top row first.
 std::vector<unsigned char> chart_rgb(const Chart& chart, int width, int height);
 std::vector<unsigned char> png_bytes(const std::vector<unsigned char>& rgb, int width, int height);
-// Long format: series,<x title>,<y title>; one row per point. A grid chart:
+// Long format: series,<x title>,<y title>; one row per point (and, when a series has error
+// bars, two more columns: low,high). A grid chart:
 // <x title>,<y title>,category,text; one row per cell.
 std::string chart_csv(const Chart& chart);
 

@@ -121,6 +121,10 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   const auto t0 = std::chrono::steady_clock::now();
   LimitResult res;
   bool failed = false;
+  // Outcome of one run: perforated, stopped (rebounded), or undecided (still moving forward
+  // and not through at its end time, even after the shooter extended it): an undecided run
+  // never counts as stopped; it is left out of the bracket with a warning (SPEC §8).
+  enum Outcome { stopped, perforated, undecided };
   auto fire = [&](double v, const char* why) {
     Shot s = shoot(v, why);
     s.velocity_mps = v;
@@ -130,32 +134,37 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
       std::snprintf(b, sizeof b, "the run at %.2f m/s failed (%s)", v, s.error.c_str());
       res.warnings.push_back(b);
       failed = true;
-    } else if (!s.decided) {
+    } else if (!s.decided && !s.perforated) {
       std::snprintf(b, sizeof b,
-                    "the run at %.2f m/s reached its end time undecided (counted as not perforated); raise "
-                    "solver.end_time_us",
-                    v);
+                    "the run at %.2f m/s reached its end time (%s) undecided, neither perforated nor stopped: left "
+                    "out of the bracket; raise solver.max_end_time_us",
+                    v, s.end_reason.c_str());
       res.warnings.push_back(b);
     }
     res.runs.push_back(s);
-    return s.perforated;
+    return s.perforated ? perforated : s.decided ? stopped : undecided;
   };
   auto budget_left = [&] { return int(res.runs.size()) < opt.max_runs && !failed; };
 
-  // Bracket: walk from the start velocity by the growth factor until the outcome flips.
+  // Bracket: walk from the start velocity by the growth factor until the outcome flips
+  // (downwards from a perforation, upwards from a stop or an undecided run).
   double v = std::clamp(opt.start_mps, opt.min_mps, opt.max_mps);
-  bool perf = fire(v, "bracket");
+  Outcome o = fire(v, "bracket");
   double lo = -1, hi = -1;
-  if (!failed) (perf ? hi : lo) = v;
+  bool down = o == perforated;
+  if (!failed && o != undecided) (o == perforated ? hi : lo) = v;
   while (budget_left() && (lo < 0 || hi < 0)) {
-    v = perf ? v / opt.growth : v * opt.growth;
+    v = down ? v / opt.growth : v * opt.growth;
     if (v < opt.min_mps || v > opt.max_mps) break;
-    perf = fire(v, "bracket");
+    o = fire(v, "bracket");
     if (failed) break;
-    if (perf)
+    if (o == perforated) {
       hi = hi < 0 ? v : std::min(hi, v);
-    else
+      if (lo < 0) down = true;
+    } else if (o == stopped) {
       lo = std::max(lo, v);
+      if (hi < 0) down = false;
+    }
   }
   if (lo < 0 || hi < 0) {
     if (!failed)
@@ -167,23 +176,45 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
     return res;
   }
   res.bracketed = true;
-  // Bisection.
+  // Bisection. An undecided run is left out: the next velocity is the middle of the widest
+  // gap between the bracket's ends and the undecided velocities inside it, so the search goes
+  // on beside them, and stops (not converged) when no gap is wider than half the tolerance.
+  std::vector<double> undecided_at;
+  auto next_try = [&] {
+    std::vector<double> pts{lo, hi};
+    for (double u : undecided_at)
+      if (u > lo && u < hi) pts.push_back(u);
+    std::sort(pts.begin(), pts.end());
+    double best = -1, gap = 0;
+    for (size_t i = 0; i + 1 < pts.size(); ++i)
+      if (pts[i + 1] - pts[i] > gap) gap = pts[i + 1] - pts[i], best = 0.5 * (pts[i] + pts[i + 1]);
+    return gap > 0.5 * opt.tolerance_mps ? best : -1.0;
+  };
+  for (const auto& r : res.runs)
+    if (!r.failed && !r.decided && !r.perforated) undecided_at.push_back(r.velocity_mps);
   while (hi - lo > opt.tolerance_mps && budget_left()) {
-    const double mid = 0.5 * (lo + hi);
-    const bool p = fire(mid, "bisect");
+    const double mid = next_try();
+    if (mid < 0) break;
+    const Outcome om = fire(mid, "bisect");
     if (failed) break;
-    (p ? hi : lo) = mid;
+    if (om == perforated)
+      hi = mid;
+    else if (om == stopped)
+      lo = mid;
+    else
+      undecided_at.push_back(mid);
   }
   res.lo_mps = lo;
   res.hi_mps = hi;
   res.converged = hi - lo <= opt.tolerance_mps;
   res.ballistic_limit_mps = 0.5 * (lo + hi);
   if (!res.converged)
-    res.warnings.push_back(failed ? "search stopped by a failed run before the bracket reached the tolerance"
-                                  : "run budget exhausted before the bracket reached the tolerance");
+    res.warnings.push_back(failed          ? "search stopped by a failed run before the bracket reached the tolerance"
+                           : budget_left() ? "undecided runs inside the bracket left nothing to bisect"
+                                           : "run budget exhausted before the bracket reached the tolerance");
   // Monotonicity check over every run made.
   for (const auto& s : res.runs) {
-    if (s.failed) continue;
+    if (s.failed || (!s.decided && !s.perforated)) continue;
     if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
       char b[200];
       std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
@@ -221,6 +252,9 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     Scene scene = load_scene(scene_path, ov);
     Simulation sim(scene);
     sim.run(interrupt);
+    // A run that reached its end time undecided never counts as stopped (SPEC §8): it goes
+    // on to solver.max_end_time_us.
+    if (sim.extend_to(scene.solver.max_end_time_s)) sim.run(interrupt);
     const Summary s = sim.summary();
     if (s.status == RunStatus::interrupted) throw std::runtime_error("interrupted");
     Shot shot;

@@ -119,10 +119,10 @@ PaperPlan paper_plan(bool quick) {
   if (!quick) {
     for (double v = 180; v <= 500 + 1e-9; v += 20) p.velocities_mps.push_back(v);
     p.limit_frictions = {0, 0.02, 0.06, 0.1, 0.2, 0.4, 0.6, 0.8, 1.0};
-    p.limit_tolerance_mps = 1;
-    p.velocity_end_time_us = 600;
-    p.limit_end_time_us = 3000;
-    p.description = "the default scene as given";
+    p.limit_tolerance_mps = 2;
+    p.compression_forces_n = {0.25, 0.5, 1, 2, 4};
+    p.flattened_gaps_mm = {0.10, 0.11, 0.12, 0.14};
+    p.description = "the default scene as given, full mesh; BL to 2 m/s";
   } else {
     // Velocity runs keep the full mesh: coarsening roughly doubles the energy absorbed and
     // multiplies the friction work at 260 m/s by more than ten (measured), which would make the
@@ -130,8 +130,8 @@ PaperPlan paper_plan(bool quick) {
     p.velocities_mps = {180, 200, 240, 260, 280, 320, 360, 500};
     p.limit_frictions = {0, 0.02, 0.1, 0.2, 0.6, 1.0};
     p.limit_tolerance_mps = 4;
-    p.velocity_end_time_us = 600;
-    p.limit_end_time_us = 3000;
+    p.compression_forces_n = {0.25, 1, 4};
+    p.flattened_gaps_mm = {0.10, 0.12};
     p.limit_overrides = {"fabric.yarns_per_element=2"};
     p.description = "8 velocities; BL searches on a mesh of 2 yarns per modelled yarn, to 4 m/s, 6 friction values";
   }
@@ -178,7 +178,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   SweepOptions so;
   so.scene_path = opt.scene_path;
   so.overrides = with(plan.velocity_overrides);
-  so.overrides.push_back("solver.end_time_us=" + num(plan.velocity_end_time_us));
+  so.overrides.push_back("solver.end_time_us=auto");
   so.out_dir = opt.out_dir + "/velocity";
   so.jobs = opt.jobs;
   std::map<double, Frame> image_frames;  // by velocity, mu = 0.2, failure 5.2 %
@@ -230,6 +230,55 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   };
   const double velocity_wall_s = vrep.wall_time_s;
 
+  // ------------------------------------------------------------------ compression what-if
+  // The crossings' compression law (docs/MODEL.md §4) at 260 m/s, mu = 0 and 0.2: each F_half
+  // and each c_min of the plan, the other at the scene's value.
+  struct CompressionRow {
+    std::string key;
+    double value = NAN, mu = NAN, energy_J = NAN;
+  };
+  std::vector<CompressionRow> crow;
+  int compression_runs = 0;
+  {
+    std::vector<Case> cc;
+    auto add = [&](const char* key, double value, double mu) {
+      Case c;
+      c.index = int(cc.size());
+      c.settings = {{key, num(value)}, {"yarn.friction", num(mu)}, {"projectile.velocity_mps", "260"}};
+      cc.push_back(c);
+    };
+    for (double f : plan.compression_forces_n)
+      for (double mu : {0.0, kReferenceFriction}) add("fabric.compression_force_n", f, mu);
+    for (double g : plan.flattened_gaps_mm)
+      for (double mu : {0.0, kReferenceFriction}) add("fabric.flattened_gap_mm", g, mu);
+    if (!cc.empty() && base_scene.fabric.crossing_compression == CrossingCompression::hyperbolic) {
+      SweepOptions co = so;
+      co.out_dir = opt.out_dir + "/compression";
+      SweepHooks ch;
+      ch.on_progress = [&](const SweepProgress& p) { progress("compression what-if", p.done, p.total); };
+      const std::vector<std::string> keys{"fabric.compression_force_n", "fabric.flattened_gap_mm", "yarn.friction",
+                                          "projectile.velocity_mps"};
+      const SweepReport crep = run_sweep(cc, cc, co, keys, ch, interrupt);
+      if (crep.interrupted) throw std::runtime_error("interrupted during the compression what-if (rerun to resume)");
+      for (const auto& e : crep.errors) result.warnings.push_back("compression what-if: " + e);
+      compression_runs = crep.cases_run;
+      const Csv csv = parse_csv(read_text_file(co.out_dir + "/results.csv"));
+      auto col = [&](const std::vector<std::string>& r, const char* name) {
+        const int i = csv.column(name);
+        return i >= 0 && i < int(r.size()) ? r[size_t(i)] : std::string();
+      };
+      for (const auto& r : csv.rows) {
+        CompressionRow w;
+        const std::string f = col(r, "fabric.compression_force_n"), g = col(r, "fabric.flattened_gap_mm");
+        w.key = !f.empty() ? "fabric.compression_force_n" : "fabric.flattened_gap_mm";
+        w.value = to_d(!f.empty() ? f : g);
+        w.mu = to_d(col(r, "yarn.friction"));
+        w.energy_J = to_d(col(r, "energy_absorbed_J"));
+        crow.push_back(w);
+      }
+    }
+  }
+
   // ------------------------------------------------------------------ ballistic limits
   const auto tl = std::chrono::steady_clock::now();
   std::vector<LimitEntry> limits;
@@ -248,8 +297,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     limits.push_back(e);
   }
   LimitOptions lo;
-  lo.start_mps = 70;
-  lo.growth = 1.3;
+  lo.start_mps = 75;
+  lo.growth = 1.25;
   lo.tolerance_mps = plan.limit_tolerance_mps;
   lo.min_mps = 5;
   lo.max_mps = 1000;
@@ -269,7 +318,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
           if (c == '=') c = '_';
         e.dir = opt.out_dir + "/limit/" + label;
         std::vector<std::string> ov = with(plan.limit_overrides);
-        ov.push_back("solver.end_time_us=" + num(plan.limit_end_time_us));
+        ov.push_back("solver.end_time_us=auto");
         for (const auto& o : e.overrides) ov.push_back(o);
         try {
           prepare_output_dir(e.dir);
@@ -344,7 +393,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
             auto ov = plan.velocity_overrides;
             for (const auto& o : {"yarn.friction=0.2", "yarn.failure_strain=0.052"}) ov.push_back(o);
             ov.push_back("projectile.velocity_mps=" + num(v));
-            ov.push_back("solver.end_time_us=" + num(plan.velocity_end_time_us));
+            ov.push_back("solver.end_time_us=auto");
             return ov;
           }());
   }
@@ -357,7 +406,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
           auto ov = plan.limit_overrides;
           ov.push_back(e.overrides[0]);
           ov.push_back("projectile.velocity_mps=" + num(e.result.hi_mps, "%.6f"));
-          ov.push_back("solver.end_time_us=" + num(plan.limit_end_time_us));
+          ov.push_back("solver.end_time_us=auto");
           return ov;
         }());
   }
@@ -374,6 +423,20 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     write_chart(c, opt.out_dir + "/charts/" + stem);
     charts.emplace_back(caption, "charts/" + stem);
   };
+  // The paper's stated values, drawn on its figures: dashed grey reference lines.
+  auto paper_line = [](const std::string& name, std::vector<double> x, std::vector<double> y) {
+    Series s;
+    s.name = name;
+    s.x = std::move(x);
+    s.y = std::move(y);
+    s.style = SeriesStyle::line;
+    s.dashed = true;
+    s.color = 7;
+    return s;
+  };
+  double energy_max = 0;
+  for (const auto& r : rows)
+    if (std::isfinite(r.energy_J)) energy_max = std::max(energy_max, r.energy_J);
   auto energy_series = [&](double mu, double failure, const std::string& name) {
     Series s;
     s.name = name;
@@ -404,6 +467,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.y = {"energy absorbed", "J"};
     c.y.include_zero = true;
     for (double mu : plan.frictions) c.series.push_back(energy_series(mu, kDefaultFailure, "mu = " + num(mu)));
+    c.series.push_back(paper_line("paper: sudden fall near 250 m/s", {250, 250}, {0, energy_max}));
     put(c, "fig13_energy_vs_velocity_friction",
         "Energy absorbed vs impact velocity for each yarn-yarn friction (Fig. 13)");
   }
@@ -430,8 +494,12 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.subtitle = sub;
     c.x = {"time", "us"};
     c.y = {"projectile velocity", "m/s"};
-    for (const auto& [mu, h] : histories)
+    double vmin = plan.history_velocity_mps;
+    for (const auto& [mu, h] : histories) {
       c.series.push_back(history_series(h, "projectile_velocity_mps", "mu = " + num(mu)));
+      for (double v : c.series.back().y) vmin = std::min(vmin, v);
+    }
+    c.series.push_back(paper_line("paper: mu = 1.0 perforates at 73 us", {73, 73}, {vmin, plan.history_velocity_mps}));
     put(c, "fig14_velocity_history",
         "Projectile velocity histories at " + num(plan.history_velocity_mps) + " m/s (Fig. 14)");
   }
@@ -450,6 +518,12 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.series.push_back(history_series(h, "friction_work_J", "yarn friction work"));
     c.series.push_back(history_series(h, "projectile_friction_J", "projectile friction work"));
     c.series.push_back(history_series(h, "released_J", "released by failure"));
+    c.series.push_back(history_series(h, "compression_J", "crossing compression (stored)"));
+    {
+      const Series t = history_series(h, "t_s", "");
+      if (!t.x.empty())
+        c.series.push_back(paper_line("paper: friction losses about 1 J", {t.x.front(), t.x.back()}, {1, 1}));
+    }
     put(c, "fig15_energy_history_mu0.2", "Energy ledger histories for mu = 0.2 (Fig. 15)");
     Chart d;
     d.title = "Kinetic + strain energy of the fabric at " + num(plan.history_velocity_mps) + " m/s (Fig. 15)";
@@ -472,7 +546,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     c.x = {"yarn-yarn friction mu", ""};
     c.y = {"ballistic limit", "m/s"};
     c.y.include_zero = true;
-    Series s{"sliding model (bisection midpoint)", {}, {}};
+    Series s{"sliding model (bracket midpoint; bars: the bracket)", {}, {}};
     Series pin{"pin-jointed model", {}, {}, SeriesStyle::line, -1, true};
     for (const auto& e : limits) {
       if (!e.have || !e.result.bracketed) continue;
@@ -482,10 +556,37 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
       } else {
         s.x.push_back(e.mu);
         s.y.push_back(e.result.ballistic_limit_mps);
+        s.y_lo.push_back(e.result.lo_mps);
+        s.y_hi.push_back(e.result.hi_mps);
       }
     }
-    c.series = {s, pin};
+    // The paper's text: 71 m/s at mu = 0.1, 70 at 0.2, and about half of BL(0.1) at mu = 0.
+    Series paper{"paper (stated in the text)", {0.0, 0.1, 0.2}, {35.5, 71, 70}, SeriesStyle::markers, 7, false};
+    c.series = {s, pin, paper};
     put(c, "fig16_ballistic_limit_vs_friction", "Ballistic limit vs friction, with the pin-jointed model (Fig. 16)");
+  }
+
+  for (const char* key : {"fabric.compression_force_n", "fabric.flattened_gap_mm"}) {
+    const bool force = std::string(key) == "fabric.compression_force_n";
+    Chart c;
+    c.title = std::string("Energy absorbed at 260 m/s vs ") + (force ? "F_half" : "c_min") +
+              " of the crossings' compression (what-if)";
+    c.subtitle = sub + "; the other parameter at the scene's value";
+    c.x = force ? Axis{"F_half, force closing half the compressible distance", "N"}
+                : Axis{"c_min, centre distance of flattened crossings", "mm"};
+    c.x.log = force;
+    c.y = {"energy absorbed", "J"};
+    c.y.include_zero = true;
+    for (double mu : {0.0, kReferenceFriction}) {
+      Series sr;
+      sr.name = "mu = " + num(mu);
+      for (const auto& r : crow)
+        if (r.key == key && same(r.mu, mu)) sr.x.push_back(r.value), sr.y.push_back(r.energy_J);
+      c.series.push_back(sr);
+    }
+    put(c, force ? "compression_force_whatif" : "compression_gap_whatif",
+        std::string("What-if: energy absorbed at 260 m/s against the crossings' ") +
+            (force ? "half-closing force F_half" : "flattened distance c_min"));
   }
 
   // ------------------------------------------------------------------ claims
@@ -714,7 +815,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   }
 
   // ------------------------------------------------------------------ report.md
-  result.runs = vrep.cases_run + limit_runs + image_runs;
+  result.runs = vrep.cases_run + limit_runs + image_runs + compression_runs;
   result.wall_time_s = since(t0);
   result.runs_per_hour = result.wall_time_s > 0 ? result.runs / (result.wall_time_s / 3600) : 0;
   std::ostringstream md;
@@ -726,19 +827,19 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
      << "- Mode: **" << (plan.quick ? "quick" : "full") << "**: " << plan.description << ".\n";
   if (plan.quick)
     md << "- What quick changes: 8 impact velocities instead of 17; the ballistic-limit searches run on a coarsened "
-          "mesh (`fabric.yarns_per_element=2`: every modelled yarn lumps two real yarns, about 4x fewer nodes and a 2x "
-          "larger stable step), to a 4 m/s tolerance, for 6 friction values instead of 9. The velocity studies "
-          "(Fig. 8, 11-15) use the full mesh: coarsening them moves the energy absorbed at 260 m/s by about 30 % "
-          "and multiplies the friction work by more than three (measured by `ravel tradeoff` on 2026-11-22 at "
-          "260 m/s, mu = 0.2: 44 J absorbed and 25 J of friction work coarsened, 63 J and 7 J on the full mesh). "
-          "The coarsened BL numbers (Fig. 16, 17) are a preview; run without `--quick` for the model's answer.\n";
+          "mesh (`fabric.yarns_per_element=2`: every modelled yarn lumps two real yarns, with the crossing geometry "
+          "scaled so the crimp angle is kept; about 4x fewer nodes and a 2x larger stable step), to a 4 m/s "
+          "tolerance, for 6 friction values instead of 9; the compression what-if at 3 forces and 2 distances. The "
+          "velocity studies (Fig. 8, 11-15) use the full mesh. The coarsened BL numbers (Fig. 16, 17) are a "
+          "preview; run without `--quick` for the model's answer.\n";
   if (!opt.overrides.empty()) {
     md << "- User overrides:";
     for (const auto& o : opt.overrides) md << " `" << o << "`";
     md << "\n";
   }
-  md << "- Velocity runs end at perforation, rebound or " << num(plan.velocity_end_time_us)
-     << " us; ballistic-limit runs at " << num(plan.limit_end_time_us) << " us.\n";
+  md << "- Every run ends at perforation or rebound (`solver.end_time_us = auto`, at most "
+     << num(base_scene.solver.max_end_time_s * 1e6) << " us); a run still undecided there is left out of its "
+     << "bracket or marked, never counted as stopped.\n";
   md << "- Wall time " << num(result.wall_time_s, "%.0f") << " s for " << result.runs << " runs made now ("
      << num(result.runs_per_hour, "%.0f") << " runs per hour, " << opt.jobs << " jobs); velocity sweep "
      << num(velocity_wall_s, "%.0f") << " s (" << vrep.cases_run << " run, " << vrep.cases_skipped << " resumed, "

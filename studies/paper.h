@@ -25,8 +25,12 @@ struct PaperPlan {
   std::vector<double> image_limit_frictions;  // Fig. 17: images at the BL
   double history_velocity_mps = 260;          // Fig. 14, 15
   double limit_tolerance_mps = 1;
-  double velocity_end_time_us = 400;
-  double limit_end_time_us = 3000;
+  // Every run ends at perforation or rebound (solver.end_time_us = auto, at most
+  // solver.max_end_time_us): an energy absorbed or a BL outcome taken from an undecided run
+  // would mean nothing.
+  // What-if of the crossings' compression law (docs/MODEL.md §4): 260 m/s runs at mu = 0 and
+  // 0.2 with each F_half (N) and each c_min (mm), the other at the scene's value.
+  std::vector<double> compression_forces_n, flattened_gaps_mm;
   std::vector<std::string> velocity_overrides;  // what quick mode changes for Fig. 8, 11-15
   std::vector<std::string> limit_overrides;     // ... and for the BL searches (Fig. 16, 17)
   std::string description;                      // one line for charts and the report

@@ -449,6 +449,7 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
         if (ec) throw OutputError(tmp + ": cannot create (" + ec.message() + ")");
         Simulation sim(scene);
         sim.run(interrupt);
+        if (opt.extend_undecided && sim.extend_to(scene.solver.max_end_time_s)) sim.run(interrupt);
         if (sim.summary().status == RunStatus::interrupted) {
           fs::remove_all(tmp, ec);
           return;  // not finished: a rerun resumes it

@@ -64,6 +64,10 @@ struct SweepOptions {
   int jobs = 1;            // concurrent cases
   int solver_threads = 1;  // solver.threads of each case
   Shard shard;
+  // A case that reaches its end time undecided (neither perforated nor stopped) goes on to
+  // solver.max_end_time_us, so that no undecided run counts as stopped (SPEC §8). false: the
+  // scene's end time is a hard end (`ravel sweep --no-extend`).
+  bool extend_undecided = true;
 };
 
 // One finished (or previously finished) case.

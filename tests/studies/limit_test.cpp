@@ -64,6 +64,40 @@ TEST(BallisticLimit, ReportsNoBracketAndFailedRuns) {
   EXPECT_FALSE(r.warnings.empty());
 }
 
+// Runs that end neither perforated nor stopped (undecided) never count as stopped: they are
+// left out of the bracket, and the bisection goes on beside them. Here every run within
+// 3 m/s below the true limit is undecided: the bracket's ends are decided runs, so the limit
+// is found within the tolerance plus that band, and a warning names each undecided run.
+TEST(BallisticLimit, UndecidedRunsAreLeftOutOfTheBracket) {
+  const double vbl = 70.4, band = 3;
+  int undecided = 0;
+  auto target = [&](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= vbl;
+    s.decided = s.perforated || v < vbl - band;
+    s.end_reason = s.perforated ? "perforated" : s.decided ? "rebounded" : "end_time";
+    s.residual_velocity_mps = s.perforated ? 0.9 * std::sqrt(v * v - vbl * vbl) : 0;
+    undecided += !s.decided;
+    return s;
+  };
+  LimitOptions o;
+  o.tolerance_mps = 1;
+  const auto r = find_ballistic_limit(target, o, false);
+  ASSERT_TRUE(r.bracketed);
+  EXPECT_LT(r.lo_mps, vbl - band) << "an undecided run was counted as stopped";
+  EXPECT_GE(r.hi_mps, vbl);
+  for (const auto& s : r.runs) {
+    if (!s.decided && !s.perforated) {
+      EXPECT_TRUE(s.velocity_mps > r.lo_mps && s.velocity_mps < r.hi_mps);
+    }
+  }
+  EXPECT_LE(r.hi_mps - r.lo_mps, band + o.tolerance_mps);
+  ASSERT_GT(undecided, 0);
+  int warned = 0;
+  for (const auto& w : r.warnings) warned += w.find("undecided") != std::string::npos;
+  EXPECT_GE(warned, undecided);
+}
+
 TEST(LambertJonas, RecoversKnownParametersFromSyntheticPoints) {
   struct Law {
     double a, p, vbl;
@@ -130,6 +164,28 @@ TEST(BallisticLimit, CheapSceneBracketsAndConverges) {
   EXPECT_TRUE(saw_lo && saw_hi);
   EXPECT_GT(r.ballistic_limit_mps, r.lo_mps);
   EXPECT_LT(r.ballistic_limit_mps, r.hi_mps);
+}
+
+// A scene whose runs near the limit outlast its end time: the shooter continues each
+// undecided run to solver.max_end_time_us, so no undecided run is counted as stopped, and the
+// search finds the same limit as one that gave its runs the long end time from the start (the
+// same runs, continued: bit for bit).
+TEST(BallisticLimit, RunsThatOutlastTheEndTimeAreExtended) {
+  LimitOptions o;
+  o.start_mps = 50;
+  o.tolerance_mps = 2.0;
+  auto scene = testing::cheap_scene();
+  auto short_end = scene, long_end = scene;
+  short_end.push_back("solver.end_time_us=60");  // far shorter than the near-limit runs
+  short_end.push_back("solver.max_end_time_us=1500");
+  const auto a = find_ballistic_limit(scene_shooter("", short_end), o, false);
+  const auto b = find_ballistic_limit(scene_shooter("", long_end), o, false);
+  ASSERT_TRUE(a.bracketed && b.bracketed);
+  for (const auto& s : a.runs) EXPECT_TRUE(s.decided) << s.velocity_mps << " m/s ended " << s.end_reason;
+  EXPECT_EQ(a.ballistic_limit_mps, b.ballistic_limit_mps);
+  ASSERT_EQ(a.runs.size(), b.runs.size());
+  for (size_t i = 0; i < a.runs.size(); ++i)
+    EXPECT_EQ(a.runs[i].residual_velocity_mps, b.runs[i].residual_velocity_mps);
 }
 
 }  // namespace
