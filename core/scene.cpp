@@ -377,7 +377,7 @@ std::vector<KeyDef> make_defs() {
     defs.push_back(d);
   }
   NUM("solver.end_time_us", "us",
-      "latest simulated time (a run also ends at perforation or rebound); auto: until perforation or rebound, at "
+      "latest simulated time (a run also ends at perforation, rebound or caught); auto: until one of those, at "
       "most solver.max_end_time_us",
       1e-6, 0, true, 1e5, solver.end_time_s);
   defs.back().set_number = [](Scene& s, double v) {

@@ -33,6 +33,8 @@ const char* to_string(EndReason r) {
       return "perforated";
     case EndReason::rebounded:
       return "rebounded";
+    case EndReason::caught:
+      return "caught";
     case EndReason::end_time:
       return "end_time";
     case EndReason::diverged:
@@ -50,6 +52,13 @@ constexpr double kPerforationConfirm_s = 3e-6;
 // A node this close to the projectile's surface (or inside it) touches it: the contact puts
 // touching nodes on the surface to rounding.
 constexpr double kTouching_m = 1e-6;
+// Caught: after contact, not perforated, the projectile's forward speed has stayed below this
+// share of the impact speed (its kinetic energy below 1e-4 of the impact's) for kCaught_s.
+// Near the ballistic limit a projectile held by friction in a deflected fabric creeps on
+// for milliseconds without turning back (0.25 m/s after 5 ms at 75 m/s, mu = 0.2): with
+// nothing left to perforate with, it is stopped.
+constexpr double kCaughtSpeed = 0.01;
+constexpr double kCaught_s = 100e-6;
 // solver.max_search_lost never trips on fewer crossings than this in one step (a small
 // patch has a few hundred crossings; one lost pair is a warning, not a divergence).
 constexpr double kMinSearchLost = 4;
@@ -81,6 +90,7 @@ struct Simulation::Impl {
   long fault_step = -1;
   double fault_time = -1;
   long search_lost_before = 0;  // diagnostics().skipped_nodes after the previous step
+  double slow_since = -1;       // time from which the projectile has been below kCaughtSpeed V0 (-1: not)
 
   const Model& model() const { return solver->model(); }
 
@@ -234,6 +244,16 @@ struct Simulation::Impl {
         finish(RunStatus::completed, EndReason::rebounded, "the fabric stopped the projectile and turned it back");
         return false;
       }
+      if (solver->had_contact() && std::abs(forward_velocity()) < kCaughtSpeed * model().impact_velocity) {
+        if (slow_since < 0) slow_since = solver->time();
+        if (solver->time() - slow_since >= kCaught_s) {
+          finish(RunStatus::completed, EndReason::caught,
+                 "the fabric stopped the projectile: below 1 % of the impact speed for 100 us, not perforated");
+          return false;
+        }
+      } else {
+        slow_since = -1;
+      }
       const Vec3d xp = solver->projectile_position();
       if (!std::isfinite(xp.norm())) {
         diverge("non_finite", "the projectile's position became NaN/infinite");
@@ -375,7 +395,8 @@ Summary Simulation::summary() const {
   const double vf = I.forward_velocity();
   // Residual velocity: the exit speed after perforation; 0 when the fabric stopped the
   // projectile; the current forward speed when the run ended undecided.
-  s.residual_velocity_mps = s.perforated ? vf : (I.reason == EndReason::rebounded ? 0.0 : std::max(0.0, vf));
+  s.residual_velocity_mps =
+      s.perforated ? vf : (I.reason == EndReason::rebounded || I.reason == EndReason::caught ? 0.0 : std::max(0.0, vf));
   s.energy_absorbed_J = 0.5 * m.projectile_mass_full *
                         (m.impact_velocity * m.impact_velocity - s.residual_velocity_mps * s.residual_velocity_mps);
   s.perforation_time_s = I.perforation_time;

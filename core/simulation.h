@@ -19,7 +19,7 @@
 namespace ravel {
 
 enum class RunStatus { running, completed, diverged, interrupted };
-enum class EndReason { none, perforated, rebounded, end_time, diverged, interrupted };
+enum class EndReason { none, perforated, rebounded, caught, end_time, diverged, interrupted };
 
 const char* to_string(RunStatus s);
 const char* to_string(EndReason r);

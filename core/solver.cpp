@@ -785,7 +785,7 @@ class SolverT final : public Solver {
   // again the next step.
   static constexpr double kMaxCompressedShift = 0.02;
   // The most closure below the flattened distance c_min the cap may leave, as a share of c_min.
-  static constexpr double kFloorLeft = 0.05;
+  static constexpr double kFloorLeft = 0.5;
   static Real compressed_shift(Real closure, Real D) {
     return std::min(Real(kCompressedShift) * closure, Real(kMaxCompressedShift) * D);
   }

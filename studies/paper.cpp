@@ -217,7 +217,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
       w.broken_warp_yarns = int(to_d(col(r, "broken_warp_yarns")));
       w.broken_weft_yarns = int(to_d(col(r, "broken_weft_yarns")));
       w.end_reason = col(r, "end_reason");
-      if (w.end_reason != "perforated" && w.end_reason != "rebounded")
+      if (w.end_reason != "perforated" && w.end_reason != "rebounded" && w.end_reason != "caught")
         result.warnings.push_back("velocity sweep case " + w.case_name + " ended by " + w.end_reason +
                                   ": its energy absorbed is not final");
       rows.push_back(w);
