@@ -110,6 +110,16 @@ struct KeyDef {
   }
 
 constexpr double inf = std::numeric_limits<double>::infinity();
+
+// A key whose value is one of a fixed list of words (an enum of the scene).
+void text_key(std::vector<KeyDef>& defs, const char* key, const char* desc, std::vector<std::string> choices,
+              std::function<void(Scene&, const std::string&)> set, std::function<std::string(const Scene&)> get) {
+  KeyDef d{key, "", desc, Type::text, 1.0, 0, 0, false, {}, {}, {}, {}, {}};
+  d.choices = std::move(choices);
+  d.set_text = std::move(set);
+  d.get_text = std::move(get);
+  defs.push_back(std::move(d));
+}
 // Node mass vs rho A L: warn beyond 25 %, refuse beyond a factor 3.
 constexpr double kNodeMassWarnFraction = 0.25;
 constexpr double kNodeMassErrorFactor = 3.0;
@@ -126,27 +136,12 @@ std::vector<KeyDef> make_defs() {
     d.get_text = [](const Scene& s) { return s.name; };
     defs.push_back(d);
   }
-  {
-    KeyDef d{"fabric.weave",
-             "",
-             "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"plain", "single_yarn"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn;
-    };
-    d.get_text = [](const Scene& s) { return std::string(to_string(s.fabric.weave)); };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "fabric.weave",
+      "plain (balanced plain weave) or single_yarn (one straight yarn along y, clamped at both ends)",
+      {"plain", "single_yarn"},
+      [](Scene& s, const std::string& v) { s.fabric.weave = v == "plain" ? Weave::plain : Weave::single_yarn; },
+      [](const Scene& s) { return std::string(to_string(s.fabric.weave)); });
   NUM("fabric.width_mm", "mm", "fabric size along x (weft direction)", 1e-3, 0, true, inf, fabric.width_m);
   NUM("fabric.length_mm", "mm", "fabric size along y (warp direction)", 1e-3, 0, true, inf, fabric.length_m);
   NUM("fabric.spacing_mm", "mm", "L0: horizontal distance between neighbouring nodes of a yarn", 1e-3, 0, true, inf,
@@ -195,29 +190,16 @@ std::vector<KeyDef> make_defs() {
     d.get_text = [](const Scene& s) { return s.fabric.clamped.to_string(); };
     defs.push_back(d);
   }
-  {
-    KeyDef d{"fabric.crossing_compression",
-             "",
-             "rigid (crossing yarns keep their centre distance D under any load, the paper read literally) or "
-             "hyperbolic (the distance falls from its rest value towards fabric.flattened_gap_mm as the normal force "
-             "grows: c = c_min + (c0 - c_min) / (1 + f / F_half))",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"rigid", "hyperbolic"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.fabric.crossing_compression = v == "rigid" ? CrossingCompression::rigid : CrossingCompression::hyperbolic;
-    };
-    d.get_text = [](const Scene& s) { return std::string(to_string(s.fabric.crossing_compression)); };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "fabric.crossing_compression",
+      "rigid (crossing yarns keep their centre distance D under any load, the paper read literally) or "
+      "hyperbolic (the distance falls from its rest value towards fabric.flattened_gap_mm as the normal force "
+      "grows: c = c_min + (c0 - c_min) / (1 + f / F_half))",
+      {"rigid", "hyperbolic"},
+      [](Scene& s, const std::string& v) {
+        s.fabric.crossing_compression = v == "rigid" ? CrossingCompression::rigid : CrossingCompression::hyperbolic;
+      },
+      [](const Scene& s) { return std::string(to_string(s.fabric.crossing_compression)); });
   NUM("fabric.flattened_gap_mm", "mm",
       "c_min: centre distance of two crossing yarns pressed fully flat (fibres packed); below D", 1e-3, 0, true, inf,
       fabric.flattened_gap_m);
@@ -226,27 +208,10 @@ std::vector<KeyDef> make_defs() {
       fabric.compression_force_n);
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
-  {
-    KeyDef d{"yarn.material",
-             "",
-             "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"zener", "elastic"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.yarn.material = v == "zener" ? Material::zener : Material::elastic;
-    };
-    d.get_text = [](const Scene& s) { return std::string(to_string(s.yarn.material)); };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "yarn.material", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", {"zener", "elastic"},
+      [](Scene& s, const std::string& v) { s.yarn.material = v == "zener" ? Material::zener : Material::elastic; },
+      [](const Scene& s) { return std::string(to_string(s.yarn.material)); });
   NUM("yarn.modulus_pa", "Pa", "Young's modulus E of the elastic material", 1, 0, true, inf, yarn.modulus_pa);
   NUM("yarn.k1_pa", "Pa", "Zener K1: spring in series (instantaneous modulus)", 1, 0, true, inf, yarn.k1_pa);
   NUM("yarn.k2_pa", "Pa", "Zener K2: spring of the Kelvin-Voigt unit", 1, 0, true, inf, yarn.k2_pa);
@@ -264,27 +229,14 @@ std::vector<KeyDef> make_defs() {
       "sqrt(L0^2 + L1^2) / L0 - 1 of stretch), as a fraction of the yarn modulus; it rises to the full modulus "
       "as the crimp is taken up",
       1, 0, false, 0.9, yarn.crimp_modulus_fraction);
-  {
-    KeyDef d{"projectile.shape",
-             "",
-             "sphere, cylinder (flat-faced) or cone",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"sphere", "cylinder", "cone"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.projectile.shape = v == "sphere" ? ShapeKind::sphere : v == "cylinder" ? ShapeKind::cylinder : ShapeKind::cone;
-    };
-    d.get_text = [](const Scene& s) { return std::string(to_string(s.projectile.shape)); };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "projectile.shape", "sphere, cylinder (flat-faced) or cone", {"sphere", "cylinder", "cone"},
+      [](Scene& s, const std::string& v) {
+        s.projectile.shape = v == "sphere"     ? ShapeKind::sphere
+                             : v == "cylinder" ? ShapeKind::cylinder
+                                               : ShapeKind::cone;
+      },
+      [](const Scene& s) { return std::string(to_string(s.projectile.shape)); });
   NUM("projectile.diameter_mm", "mm", "projectile diameter", 1e-3, 0, true, inf, projectile.diameter_m);
   NUM("projectile.length_mm", "mm", "cylinder length / cone height", 1e-3, 0, true, inf, projectile.length_m);
   NUM("projectile.mass_g", "g", "projectile mass M", 1e-3, 0, true, inf, projectile.mass_kg);
@@ -296,27 +248,14 @@ std::vector<KeyDef> make_defs() {
       projectile.offset_y_m);
   NUM("projectile.obliquity_deg", "deg", "angle of the flight path from the fabric normal (in the x-z plane)", 1, 0,
       false, 80, projectile.obliquity_deg);
-  {
-    KeyDef d{"solver.model",
-             "",
-             "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"sliding", "pin_jointed"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed;
-    };
-    d.get_text = [](const Scene& s) { return std::string(to_string(s.solver.model)); };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "solver.model",
+      "sliding (yarns slide with friction, the paper's model) or pin_jointed (one shared node per crossing)",
+      {"sliding", "pin_jointed"},
+      [](Scene& s, const std::string& v) {
+        s.solver.model = v == "sliding" ? ContactModel::sliding : ContactModel::pin_jointed;
+      },
+      [](const Scene& s) { return std::string(to_string(s.solver.model)); });
   NUM("solver.dt_factor", "", "alpha of Eq 4: dt = alpha L / c", 1, 0, true, 10.0, solver.dt_factor);
   INT("solver.contact_iterations", "", "N: yarn contact correction passes per step (Eq 16-17)", 1, 64,
       solver.contact_iterations);
