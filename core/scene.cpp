@@ -269,52 +269,20 @@ std::vector<KeyDef> make_defs() {
        solver.projectile_holds);
   NUM("solver.friction_penalty", "", "alpha_f of the stick penalty K = alpha_f m / dt^2 (Eq 12), <= 1", 1, 0, true, 1.0,
       solver.friction_penalty);
-  {
-    KeyDef d{"solver.symmetry",
-             "",
-             "auto (smallest model the scene's symmetry allows) or full",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"auto", "full"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full;
-    };
-    d.get_text = [](const Scene& s) {
-      return std::string(s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full");
-    };
-    defs.push_back(d);
-  }
-  {
-    KeyDef d{"solver.precision",
-             "",
-             "double or float: floating-point precision of the state",
-             Type::text,
-             1.0,
-             0,
-             0,
-             false,
-             {},
-             {},
-             {},
-             {},
-             {}};
-    d.choices = {"double", "float"};
-    d.set_text = [](Scene& s, const std::string& v) {
-      s.solver.precision = v == "double" ? Precision::double_precision : Precision::single_precision;
-    };
-    d.get_text = [](const Scene& s) {
-      return std::string(s.solver.precision == Precision::double_precision ? "double" : "float");
-    };
-    defs.push_back(d);
-  }
+  text_key(
+      defs, "solver.symmetry", "auto (smallest model the scene's symmetry allows) or full", {"auto", "full"},
+      [](Scene& s, const std::string& v) {
+        s.solver.symmetry = v == "auto" ? SymmetryMode::automatic : SymmetryMode::full;
+      },
+      [](const Scene& s) { return std::string(s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full"); });
+  text_key(
+      defs, "solver.precision", "double or float: floating-point precision of the state", {"double", "float"},
+      [](Scene& s, const std::string& v) {
+        s.solver.precision = v == "double" ? Precision::double_precision : Precision::single_precision;
+      },
+      [](const Scene& s) {
+        return std::string(s.solver.precision == Precision::double_precision ? "double" : "float");
+      });
   NUM("solver.end_time_us", "us",
       "latest simulated time (a run also ends at perforation, rebound or caught); auto: until one of those, at "
       "most solver.max_end_time_us",
