@@ -34,11 +34,11 @@ int main(int argc, char** argv) {
     sim.run();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto s = sim.summary();
-    const double ns = double(s.node_count) * double(s.step_count);
+    const double ns = double(s.modelled_node_count) * double(s.step_count);
     const char* spin = std::getenv("GOMP_SPINCOUNT");
     std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f,%s,%s\n", s.model.c_str(), s.contact_model.c_str(),
                 scene.solver.precision == ravel::Precision::double_precision ? "double" : "float", scene.solver.threads,
-                s.node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
+                s.modelled_node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
                 s.residual_velocity_mps, spin ? spin : "default",
                 sim.solver().simd_active() ? ravel::lanes::isa_name(ravel::lanes::isa()) : "off");
   }

@@ -19,6 +19,33 @@ struct Grid {
 
 }  // namespace
 
+SymmetryChoice choose_symmetry(const Scene& scene) {
+  const auto& f = scene.fabric;
+  const auto& p = scene.projectile;
+  const bool single = f.weave == Weave::single_yarn;
+  const ClampedEdges clamped = single ? ClampedEdges{false, false, true, true} : f.clamped;
+  const bool normal_strike = p.obliquity_deg == 0.0;
+  bool can_x = !single && p.offset_x_m == 0.0 && normal_strike && clamped.left == clamped.right;
+  bool can_y = p.offset_y_m == 0.0 && clamped.bottom == clamped.top;
+  std::string why_not;
+  if (!can_x) {
+    if (single)
+      why_not += "a single yarn has no x extent to save; ";
+    else if (p.offset_x_m != 0.0)
+      why_not += "off-centre in x; ";
+    else if (!normal_strike)
+      why_not += "oblique strike breaks x symmetry; ";
+    else
+      why_not += "left/right clamps differ; ";
+  }
+  if (!can_y) why_not += p.offset_y_m != 0.0 ? "off-centre in y; " : "bottom/top clamps differ; ";
+  if (scene.solver.symmetry == SymmetryMode::full) {
+    can_x = can_y = false;
+    why_not = "solver.symmetry = full forces the whole fabric";
+  }
+  return {can_x, can_y, why_not};
+}
+
 Model build_model(const Scene& scene) {
   Model m;
   const auto& f = scene.fabric;
@@ -40,26 +67,9 @@ Model build_model(const Scene& scene) {
   m.clamped = single ? ClampedEdges{false, false, true, true} : f.clamped;
 
   // ---- symmetry (SPEC §6): mirror planes the scene allows
-  const bool normal_strike = p.obliquity_deg == 0.0;
-  bool can_x =
-      !single && p.offset_x_m == 0.0 && normal_strike && m.clamped.left == m.clamped.right && f.width_m == f.width_m;
-  bool can_y = p.offset_y_m == 0.0 && m.clamped.bottom == m.clamped.top;
-  std::string why_not;
-  if (!can_x) {
-    if (single)
-      why_not += "a single yarn has no x extent to save; ";
-    else if (p.offset_x_m != 0.0)
-      why_not += "off-centre in x; ";
-    else if (!normal_strike)
-      why_not += "oblique strike breaks x symmetry; ";
-    else
-      why_not += "left/right clamps differ; ";
-  }
-  if (!can_y) why_not += p.offset_y_m != 0.0 ? "off-centre in y; " : "bottom/top clamps differ; ";
-  if (scene.solver.symmetry == SymmetryMode::full) {
-    can_x = can_y = false;
-    why_not = "solver.symmetry = full forces the whole fabric";
-  }
+  const SymmetryChoice sym = choose_symmetry(scene);
+  const bool can_x = sym.mirror_x, can_y = sym.mirror_y;
+  const std::string& why_not = sym.why_not;
   m.mirror_x = can_x;
   m.mirror_y = can_y;
   m.symmetry_factor = (can_x ? 2.0 : 1.0) * (can_y ? 2.0 : 1.0);

@@ -135,6 +135,13 @@ struct Model {
 
 // Build the model a scene asks for, choosing the smallest symmetric part when
 // scene.solver.symmetry is auto.
+// The mirror planes a scene allows (SPEC §6) and, in words, why not the others.
+struct SymmetryChoice {
+  bool mirror_x = false, mirror_y = false;
+  std::string why_not;
+};
+SymmetryChoice choose_symmetry(const Scene& scene);
+
 Model build_model(const Scene& scene);
 
 }  // namespace ravel

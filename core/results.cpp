@@ -1,5 +1,9 @@
 #include "results.h"
 
+#include <cstdint>
+
+#include <cctype>
+
 #include <unistd.h>
 #include <cerrno>
 #include <cmath>
@@ -138,6 +142,25 @@ std::string history_csv(const std::vector<HistoryRow>& rows) {
   return out;
 }
 
+std::string safe_file_name(const std::string& text) {
+  std::string out;
+  for (const char ch : text) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(ch)) || ch == '.' || ch == '-' || ch == '_';
+    out += keep ? ch : '_';
+  }
+  while (!out.empty() && out.front() == '.') out.front() = '_';
+  if (out.size() > 80) out.resize(80);
+  return out.empty() ? "scene" : out;
+}
+
+std::string short_hash(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
+  char b[17];
+  std::snprintf(b, sizeof b, "%08x", unsigned((h >> 32) ^ h));
+  return b;
+}
+
 std::string summary_json(const Summary& s, const Scene& scene) {
   nlohmann::ordered_json j;
   j["scene"] = s.scene_name;
@@ -149,14 +172,18 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["divergence_cause"] = fault ? nlohmann::ordered_json(s.divergence_cause) : nlohmann::ordered_json(nullptr);
   j["divergence_step"] = fault ? nlohmann::ordered_json(s.divergence_step) : nlohmann::ordered_json(nullptr);
   j["divergence_time_s"] = fault ? nlohmann::ordered_json(s.divergence_time_s) : nlohmann::ordered_json(nullptr);
-  j["perforated"] = s.perforated;
+  // A diverged run has no outcome: whether it perforated, its residual velocity and the
+  // energy it absorbed are undefined (null), not the numbers of a broken state.
+  const bool undefined = s.status == RunStatus::diverged;
+  auto outcome = [&](auto v) { return undefined ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(v); };
+  j["perforated"] = outcome(s.perforated);
   j["impact_velocity_mps"] = s.impact_velocity_mps;
-  j["residual_velocity_mps"] = s.residual_velocity_mps;
-  j["energy_absorbed_J"] = s.energy_absorbed_J;
-  j["perforation_time_s"] =
-      s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
+  j["residual_velocity_mps"] = outcome(s.residual_velocity_mps);
+  j["energy_absorbed_J"] = outcome(s.energy_absorbed_J);
+  j["perforation_time_s"] = s.perforation_time_s >= 0 && !undefined ? nlohmann::ordered_json(s.perforation_time_s)
+                                                                     : nlohmann::ordered_json(nullptr);
   j["energy_balance_error"] = s.energy_balance_error;
-  j["friction_work_J"] = s.friction_work_J;
+  j["friction_work_J"] = outcome(s.friction_work_J);
   j["yarn_friction"] = scene.yarn.friction;
   j["failure_strain"] = scene.yarn.failure_strain;
   j["model"] = s.model;
@@ -167,6 +194,9 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["node_count"] = s.node_count;
   j["element_count"] = s.element_count;
   j["crossing_count"] = s.crossing_count;
+  j["modelled_node_count"] = s.modelled_node_count;
+  j["modelled_element_count"] = s.modelled_element_count;
+  j["modelled_crossing_count"] = s.modelled_crossing_count;
   j["step_count"] = s.step_count;
   j["dt_s"] = s.dt_s;
   j["dt_factor"] = scene.solver.dt_factor;

@@ -23,6 +23,14 @@ void write_file_atomic(const std::string& path, const std::string& content);
 // The same for writers that report errors as a bool: false, and the message in *error.
 bool write_file_atomic(const std::string& path, const std::string& content, std::string* error);
 
+// `text` (a scene name, say) made safe as one file name inside an output folder: letters,
+// digits, '.', '-' and '_' kept, anything else (a '/', '..', spaces) replaced by '_', no
+// leading '.', at most 80 characters; "scene" when nothing is left.
+std::string safe_file_name(const std::string& text);
+// A short stable tag of `text` (8 hex digits of its FNV-1a hash): tells apart files made
+// from different overrides.
+std::string short_hash(const std::string& text);
+
 // The column names of history.csv, in order (t_s first).
 std::vector<std::string> history_columns();
 std::string history_csv(const std::vector<HistoryRow>& rows);

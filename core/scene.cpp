@@ -2,11 +2,14 @@
 // drives parsing, `--set` overrides, validation messages, to_toml() and `ravel keys`.
 #include "scene.h"
 
+#include "model.h"
+
 #include <toml++/toml.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -123,6 +126,20 @@ void text_key(std::vector<KeyDef>& defs, const char* key, const char* desc, std:
 // Node mass vs rho A L: warn beyond 25 %, refuse beyond a factor 3.
 constexpr double kNodeMassWarnFraction = 0.25;
 constexpr double kNodeMassErrorFactor = 3.0;
+// Memory per modelled node of a run (solver state, scratch, history): 1045 bytes measured
+// on the default scene at 162,450 nodes (peak resident size, 480 x 480 mm, less the
+// 120 x 120 mm run's), with a margin for the app's frame copies.
+constexpr double kBytesPerNode = 1200;
+// Memory the system has available (MemAvailable of /proc/meminfo); 0 when unknown.
+double available_memory_bytes() {
+  std::ifstream in("/proc/meminfo");
+  std::string name;
+  double kb = 0;
+  std::string unit;
+  while (in >> name >> kb >> unit)
+    if (name == "MemAvailable:") return kb * 1024;
+  return 0;
+}
 // Estimated time steps of a run: warn above, refuse above.
 constexpr double kManySteps = 2e7;
 constexpr double kMaxSteps = 1e9;
@@ -629,7 +646,31 @@ void apply_override(Scene& s, const std::string& kv) {
 const std::vector<SceneKeyInfo>& scene_keys() {
   static const std::vector<SceneKeyInfo> info = [] {
     std::vector<SceneKeyInfo> v;
-    for (const auto& d : defs()) v.push_back({d.key, d.unit, d.description});
+    const Scene built_in;
+    for (const auto& d : defs()) {
+      SceneKeyInfo k{d.key, d.unit, d.description, "", ""};
+      if (d.is_auto && d.is_auto(built_in))
+        k.default_value = "auto";
+      else if (d.type == Type::text)
+        k.default_value = "\"" + d.get_text(built_in) + "\"";
+      else if (d.type == Type::boolean)
+        k.default_value = d.get_number(built_in) != 0 ? "true" : "false";
+      else
+        k.default_value = fmt(d.get_number(built_in) / d.scale);
+      if (d.type == Type::text) {
+        for (const auto& c : d.choices) k.range += (k.range.empty() ? "" : " | ") + c;
+      } else if (d.type != Type::boolean) {
+        const bool lo = std::isfinite(d.min), hi = std::isfinite(d.max);
+        if (lo && hi)
+          k.range = (d.min_exclusive ? "(" : "[") + fmt(d.min) + ", " + fmt(d.max) + "]";
+        else if (lo)
+          k.range = (d.min_exclusive ? "> " : ">= ") + fmt(d.min);
+        else if (hi)
+          k.range = "<= " + fmt(d.max);
+        if (d.set_auto) k.range += " or auto";
+      }
+      v.push_back(std::move(k));
+    }
     return v;
   }();
   return info;
@@ -654,11 +695,26 @@ Scene parse_scene(const std::string& toml_text, const std::string& source_name,
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
   if (path.empty()) return parse_scene("", "", overrides);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw SceneError("", path, "is a folder, not a scene file (a run's output folder holds its scene.toml)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError("", path, "cannot open scene file (does it exist and is it readable?)");
   std::stringstream buf;
   buf << in.rdbuf();
-  return parse_scene(buf.str(), path, overrides);
+  const std::string text = buf.str();
+  // An empty file (or /dev/null) would silently be the built-in scene: refuse it.
+  bool content = false;
+  std::istringstream lines(text);
+  for (std::string line; !content && std::getline(lines, line);) {
+    const auto first = line.find_first_not_of(" \t\r");
+    content = first != std::string::npos && line[first] != '#';
+  }
+  if (!content)
+    throw SceneError("", path,
+                     "holds no scene keys (empty or only comments); give a scene file such as " +
+                         default_scene_path() + ", or leave SCENE out for the default scene");
+  return parse_scene(text, path, overrides);
 }
 
 void validate_scene(Scene& s) {
@@ -691,10 +747,28 @@ void validate_scene(Scene& s) {
     if (f.width_m < 2 * L0 || f.length_m < 2 * L0)
       fail(f.width_m < 2 * L0 ? "fabric.width_mm" : "fabric.length_mm",
            "the fabric must span at least two yarn spacings (fabric.spacing_mm x fabric.yarns_per_element) each way");
+    // Too big: blame the size when it is what the user changed, else the spacing.
+    const Scene built_in;
+    const bool size_changed = f.width_m != built_in.fabric.width_m || f.length_m != built_in.fabric.length_m;
+    const std::string size_key = f.width_m >= f.length_m ? "fabric.width_mm" : "fabric.length_mm";
+    const std::string too_big_key = size_changed ? size_key : "fabric.spacing_mm";
+    const std::string sizes = "fabric.width_mm = " + fmt(f.width_m * 1e3) + ", fabric.length_mm = " +
+                              fmt(f.length_m * 1e3) + " at fabric.spacing_mm = " + fmt(f.spacing_m * 1e3) +
+                              (f.yarns_per_element > 1 ? " x fabric.yarns_per_element = " + fmt(f.yarns_per_element) : "");
     if (f.width_m / L0 > 4000 || f.length_m / L0 > 4000)
-      fail("fabric.spacing_mm", "more than 4000 yarns per direction (" +
-                                    fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
-                                    "); this would not fit in memory");
+      fail(too_big_key, "more than 4000 yarns per direction (" + fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
+                            ", from " + sizes + "); this would not fit in memory");
+    // Memory: nodes the solver will hold (after symmetry) at the measured bytes per node.
+    const SymmetryChoice sym = choose_symmetry(s);
+    const double hx = std::floor(f.width_m / 2 / L0 + 1e-9), hy = std::floor(f.length_m / 2 / L0 + 1e-9);
+    const double nx = sym.mirror_x ? hx + 1 : 2 * hx + 1, ny = sym.mirror_y ? hy + 1 : 2 * hy + 1;
+    const double nodes = nx * ny * (s.solver.model == ContactModel::sliding ? 2 : 1);
+    const double need = nodes * kBytesPerNode;
+    const double avail = available_memory_bytes();
+    if (avail > 0 && need > avail)
+      fail(too_big_key, "the fabric (" + sizes + ") needs about " + fmt3(need / 1e9) + " GB for its " + fmt3(nodes) +
+                            " modelled nodes, and " + fmt3(avail / 1e9) +
+                            " GB of memory is available; make it smaller or coarser (fabric.yarns_per_element)");
   } else {
     if (f.length_m < 2 * L0) fail("fabric.length_mm", "the yarn must span at least two node spacings");
     if (f.length_m / L0 > 1e6)

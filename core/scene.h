@@ -151,6 +151,8 @@ std::string scene_to_toml(const Scene& scene);
 // Every key the scene understands, with its unit and a one-line description.
 struct SceneKeyInfo {
   std::string key, unit, description;
+  std::string default_value;  // what the key is when a scene file leaves it out, as TOML
+  std::string range;          // allowed values: "[0, 1]", "> 0", "a | b", "" for any
 };
 const std::vector<SceneKeyInfo>& scene_keys();
 

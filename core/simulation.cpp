@@ -94,6 +94,53 @@ struct Simulation::Impl {
 
   const Model& model() const { return solver->model(); }
 
+  // How many whole-fabric items each modelled one stands for: symmetry_factor, halved for
+  // each symmetry plane the item lies on (a warp yarn at x = 0, a weft yarn at y = 0, a
+  // node on the plane). Counts in the results are for the whole fabric; energies need no
+  // such weights (the masses and areas on a plane are already halved).
+  std::vector<double> elem_weight, crossing_weight;
+  double fabric_nodes = 0;
+  void compute_weights() {
+    const Model& m = model();
+    auto on_plane = [&](int yarn) {
+      const bool is_warp = m.yarn_family[yarn] == warp;
+      return m.yarn_grid[yarn] == 0 && (is_warp ? m.mirror_x : m.mirror_y);
+    };
+    elem_weight.assign(m.element_count, m.symmetry_factor);
+    for (int e = 0; e < m.element_count; ++e)
+      if (on_plane(m.elem_yarn[e])) elem_weight[e] *= 0.5;
+    crossing_weight.assign(m.crossings.size(), m.symmetry_factor);
+    for (size_t c = 0; c < m.crossings.size(); ++c) {
+      if (on_plane(m.crossings[c].warp_yarn)) crossing_weight[c] *= 0.5;
+      if (on_plane(m.crossings[c].weft_yarn)) crossing_weight[c] *= 0.5;
+    }
+    constexpr double on = 1e-9;  // m: nodes are placed on the plane exactly
+    fabric_nodes = 0;
+    for (int i = 0; i < m.node_count; ++i) {
+      double w = m.symmetry_factor;
+      if (m.mirror_x && std::abs(m.x0[i].x()) < on) w *= 0.5;
+      if (m.mirror_y && std::abs(m.x0[i].y()) < on) w *= 0.5;
+      fabric_nodes += w;
+    }
+  }
+  int broken_elements(int family) const {
+    const Model& m = model();
+    double n = 0;
+    for (int e = 0; e < m.element_count; ++e)
+      if (m.yarn_family[m.elem_yarn[e]] == family && solver->broken(e)) n += elem_weight[e];
+    return int(std::lround(n));
+  }
+  // Loaded crossings (normal force > 0), sliding and stuck, whole fabric.
+  void loaded_crossings(int* sliding, int* stuck) const {
+    double sl = 0, st = 0;
+    for (size_t c = 0; c < crossing_weight.size(); ++c) {
+      if (!solver->crossing_active(int(c)) || !(solver->crossing_normal_force(int(c)) > 0)) continue;
+      (solver->crossing_sliding(int(c)) ? sl : st) += crossing_weight[c];
+    }
+    *sliding = int(std::lround(sl));
+    *stuck = int(std::lround(st));
+  }
+
   double forward_velocity() const { return solver->projectile_velocity().dot(model().flight_dir); }
 
   HistoryRow sample() const {
@@ -106,20 +153,15 @@ struct Simulation::Impl {
     r.ledger = solver->ledger().scaled(f);
     const double e0 = m.initial_energy();
     r.balance_error = e0 > 0 ? (r.ledger.total() - e0) / e0 : 0;
-    r.broken_warp = int(std::lround(solver->broken_count(warp) * broken_weight(warp)));
-    r.broken_weft = int(std::lround(solver->broken_count(weft) * broken_weight(weft)));
+    r.broken_warp = broken_elements(warp);
+    r.broken_weft = broken_elements(weft);
     r.max_strain = solver->max_strain();
     r.projectile_contact_force_N = solver->projectile_contact_force() * f;
     r.yarn_contact_force_N = solver->yarn_contact_force() * f;
     r.nodes_on_projectile = solver->nodes_on_projectile();
-    r.sliding_crossings = int(std::lround(solver->sliding_crossings() * f));
-    r.stuck_crossings = int(std::lround(solver->stuck_crossings() * f));
+    loaded_crossings(&r.sliding_crossings, &r.stuck_crossings);
     return r;
   }
-
-  // Broken elements are counted for the whole fabric: each modelled element stands for
-  // symmetry_factor elements (those on a symmetry plane for half as many).
-  double broken_weight(int) const { return model().symmetry_factor; }
 
   // Perforated (docs/MODEL.md §8): the projectile has been free of every node attached to the
   // clamps for kPerforationConfirm_s, still moves forward, and no attached node lies ahead of
@@ -303,6 +345,7 @@ Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   impl_->solver = make_solver(m, scene.solver.precision, scene.solver.threads);
   impl_->solver->set_simd(scene.solver.simd);
   impl_->solver->set_max_balance_error(scene.solver.max_balance_error);
+  impl_->compute_weights();
   impl_->sample_every = std::max<long>(1, std::lround(scene.output.history_interval_s / m.dt));
   impl_->end_time = m.end_time;
   impl_->warnings = scene.warnings;
@@ -405,16 +448,22 @@ Summary Simulation::summary() const {
   s.model = m.symmetry_label;
   s.model_reason = m.symmetry_reason;
   s.contact_model = to_string(m.contact);
-  s.node_count = m.node_count;
-  s.element_count = m.element_count;
-  s.crossing_count = int(m.crossings.size());
+  s.modelled_node_count = m.node_count;
+  s.modelled_element_count = m.element_count;
+  s.modelled_crossing_count = int(m.crossings.size());
+  s.node_count = int(std::lround(I.fabric_nodes));
+  double ew = 0, cw = 0;
+  for (double w : I.elem_weight) ew += w;
+  for (double w : I.crossing_weight) cw += w;
+  s.element_count = int(std::lround(ew));
+  s.crossing_count = int(std::lround(cw));
   s.step_count = I.solver->steps();
   s.dt_s = m.dt;
   s.end_time_s = I.solver->time();
   s.wall_time_s = I.wall_s;
   s.node_steps_per_s = I.wall_s > 0 ? double(m.node_count) * double(s.step_count) / I.wall_s : 0;
-  s.broken_warp = int(std::lround(I.solver->broken_count(warp) * m.symmetry_factor));
-  s.broken_weft = int(std::lround(I.solver->broken_count(weft) * m.symmetry_factor));
+  s.broken_warp = I.broken_elements(warp);
+  s.broken_weft = I.broken_elements(weft);
   // Broken yarns (whole fabric): a yarn on a symmetry plane stands for one yarn, others for two.
   for (int y = 0; y < m.yarn_count(); ++y) {
     bool any = false;

@@ -58,7 +58,10 @@ struct Summary {
   std::string model;                 // quarter | half | full
   std::string model_reason;          // why that model
   std::string contact_model;         // sliding | pin_jointed
+  // The whole fabric (what every count, energy and history column describes) ...
   int node_count = 0, element_count = 0, crossing_count = 0;
+  // ... and the part the solver models (quarter / half / full, see `model`).
+  int modelled_node_count = 0, modelled_element_count = 0, modelled_crossing_count = 0;
   long step_count = 0;
   double dt_s = 0;
   double end_time_s = 0;

@@ -226,7 +226,7 @@ void fill_row_from_case(TradeoffRow& row, const std::string& dir) {
   auto d = [&](const char* k) { return j.contains(k) && j[k].is_number() ? j[k].get<double>() : NAN; };
   row.wall_time_s = d("wall_time_s");
   row.node_steps_per_s = d("node_steps_per_s");
-  row.perforated = j.value("perforated", false);
+  row.perforated = j.contains("perforated") && j["perforated"].is_boolean() && j["perforated"].get<bool>();
   row.value_q[q_residual_velocity] = d("residual_velocity_mps");
   row.value_q[q_energy_absorbed] = d("energy_absorbed_J");
   row.value_q[q_perforation_time] = j.contains("perforation_time_s") && j["perforation_time_s"].is_number()

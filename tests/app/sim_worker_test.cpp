@@ -27,9 +27,9 @@ Scene small_scene(std::vector<std::string> extra = {}) {
 
 // Everything in a view must describe the same instant of the same run.
 void expect_consistent(const WorkerView& v) {
-  ASSERT_EQ(v.frame.node_pos.size(), size_t(v.summary.node_count));
+  ASSERT_EQ(v.frame.node_pos.size(), size_t(v.summary.modelled_node_count));
   EXPECT_EQ(v.frame.node_vel.size(), v.frame.node_pos.size());
-  EXPECT_EQ(v.frame.elem_a.size(), size_t(v.summary.element_count));
+  EXPECT_EQ(v.frame.elem_a.size(), size_t(v.summary.modelled_element_count));
   EXPECT_EQ(v.summary.step_count, v.step_count);
   // The frame is taken at a step boundary: its time is a whole number of steps.
   const double dt = v.summary.dt_s;

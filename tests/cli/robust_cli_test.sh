@@ -80,7 +80,7 @@ done
 
 # --- Bad input, one class per line: exit 2, key, where, problem; nothing written.
 printf '[fabric]\nwidth_mm = 120\nspacing_mm = 0.000844\n' >"$tmp/units.toml"
-expect_exit 2 "units.toml:3: fabric.spacing_mm: more than 4000 yarns per direction (142180); this would not fit in memory; it looks like a value in m (0.000844 m = 0.844 mm" \
+expect_exit 2 "units.toml:3: fabric.spacing_mm: more than 4000 yarns per direction (142180, from fabric.width_mm = 120, fabric.length_mm = 120 at fabric.spacing_mm = 0.000844); this would not fit in memory; it looks like a value in m (0.000844 m = 0.844 mm" \
   -- "$ravel" run "$tmp/units.toml" --out "$tmp/units"
 [ ! -e "$tmp/units" ] && ok || bad "a refused scene created its output folder"
 expect_exit 2 "projectile.diameter_mm: the projectile (150 mm) is larger than the fabric (120 x 120 mm)" -- \

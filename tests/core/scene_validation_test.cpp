@@ -58,7 +58,7 @@ TEST(SceneValidation, ValuesThatLookLikeAnotherUnit) {
   // Refused values say which unit they look like.
   EXPECT_HAS(
       error_of("", {"fabric.spacing_mm=0.000844"}),
-      "fabric.spacing_mm: more than 4000 yarns per direction (142180); this would not fit in memory; it looks like a "
+      "fabric.spacing_mm: more than 4000 yarns per direction (142180, from fabric.width_mm = 120, fabric.length_mm = 120 at fabric.spacing_mm = 0.000844); this would not fit in memory; it looks like a "
       "value in m (0.000844 m = 0.844 mm; the key is in mm)");
   EXPECT_HAS(error_of("", {"yarn.failure_strain=5.2"}),
              "must be <= 1, got 5.2; it looks like a value in % (5.2 % = 0.052");

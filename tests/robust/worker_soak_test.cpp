@@ -48,8 +48,8 @@ Scene small_scene(std::vector<std::string> extra = {}) {
 }
 
 void expect_consistent(const WorkerView& v) {
-  ASSERT_EQ(v.frame.node_pos.size(), size_t(v.summary.node_count));
-  ASSERT_EQ(v.frame.elem_a.size(), size_t(v.summary.element_count));
+  ASSERT_EQ(v.frame.node_pos.size(), size_t(v.summary.modelled_node_count));
+  ASSERT_EQ(v.frame.elem_a.size(), size_t(v.summary.modelled_element_count));
   EXPECT_EQ(v.summary.step_count, v.step_count);
   const double dt = v.summary.dt_s;
   ASSERT_GT(dt, 0);
