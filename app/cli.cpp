@@ -4,23 +4,25 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <new>
+#include <string>
 #include <thread>
 
+#include "commands_table.h"
 #include "results.h"
 #include "sweep.h"
 
 namespace ravel::app {
 
-CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<std::string>& value_flags,
-                      const std::vector<std::string>& switch_flags, const std::vector<std::string>& repeatable) {
+CommonArgs parse_args(const std::vector<std::string>& args, const std::string& command) {
+  const Command* cmd = find_command(command);
+  if (!cmd) throw UsageError("unknown command '" + command + "'");
+  auto option = [&](const std::string& n) -> const CommandOption* {
+    for (const auto& o : cmd->options)
+      if (n == o.name) return &o;
+    return nullptr;
+  };
   CommonArgs a;
-  auto takes_value = [&](const std::string& n) {
-    return n == "set" || n == "out" || n == "threads" ||
-           std::find(value_flags.begin(), value_flags.end(), n) != value_flags.end();
-  };
-  auto is_switch = [&](const std::string& n) {
-    return std::find(switch_flags.begin(), switch_flags.end(), n) != switch_flags.end();
-  };
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& s = args[i];
     if (s.rfind("--", 0) == 0 && s.size() > 2) {
@@ -31,19 +33,24 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
         name = name.substr(0, eq);
         has_value = true;
       }
-      if (is_switch(name)) {
+      const CommandOption* o = option(name);
+      if (!o) throw UsageError("unknown option --" + name + " for ravel " + command + " (see 'ravel help " + command + "')");
+      if (!o->value) {
         if (has_value) throw UsageError("--" + name + " takes no value");
         a.switches.push_back(name);
         continue;
       }
-      if (!takes_value(name)) throw UsageError("unknown option --" + name);
       if (!has_value) {
-        if (i + 1 >= args.size()) throw UsageError("--" + name + " needs a value");
+        if (i + 1 >= args.size()) throw UsageError("--" + name + " needs a value (" + o->value + ")");
         value = args[++i];
       }
+      if (!o->repeatable && a.multi.count(name))
+        throw UsageError("--" + name + " given twice ('" + a.multi[name].front() + "' and '" + value + "')");
+      a.multi[name].push_back(value);
       if (name == "set") {
         a.overrides.push_back(value);
       } else if (name == "out") {
+        if (value.empty()) throw UsageError("--out needs a folder name");
         a.out_dir = value;
       } else if (name == "threads") {
         char* end = nullptr;
@@ -52,13 +59,8 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
           throw UsageError("--threads: expected a whole number 0..256, got '" + value + "'");
         a.threads = int(t);
       } else {
-        if (a.flags.count(name) && std::find(repeatable.begin(), repeatable.end(), name) == repeatable.end())
-          throw UsageError("--" + name + " given twice");
         a.flags[name] = value;
-        a.multi[name].push_back(value);
       }
-    } else if (s == "-h") {
-      throw UsageError("help");
     } else {
       if (!a.scene_path.empty())
         throw UsageError("more than one scene file given ('" + a.scene_path + "' and '" + s + "')");
@@ -71,6 +73,17 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<st
 std::string scene_path_from(const CommonArgs& a) {
   std::string path = a.scene_path;
   if (path.empty()) path = default_scene_path();
+  // A run's (or a sweep case's) output folder stands for the scene it ran: its scene.toml.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    const std::string inside = (std::filesystem::path(path) / "scene.toml").string();
+    if (!std::filesystem::is_regular_file(inside, ec))
+      throw SceneError("", path, "is a folder without a scene.toml; give a scene file or a run's output folder");
+    static bool said = false;  // once per command, however often the path is resolved
+    if (!said) std::fprintf(stderr, "ravel: %s is a folder: using the scene it holds, %s\n", path.c_str(), inside.c_str());
+    said = true;
+    return inside;
+  }
   // A bare name finds the shipped scene: `ravel run twaron_ct716`.
   if (!std::filesystem::exists(path)) {
     std::string shipped =
@@ -114,11 +127,19 @@ int report_error(const std::exception& e) {
     return exit_usage;
   }
   if (dynamic_cast<const UsageError*>(&e)) {
-    std::fprintf(stderr, "ravel: %s (see 'ravel help')\n", e.what());
+    const std::string m = e.what();
+    std::fprintf(stderr, "ravel: %s%s\n", m.c_str(), m.find("'ravel help") == std::string::npos ? " (see 'ravel help')" : "");
     return exit_usage;
   }
   if (dynamic_cast<const OutputError*>(&e)) {
     std::fprintf(stderr, "ravel: output error: %s\n", e.what());
+    return exit_failure;
+  }
+  if (dynamic_cast<const std::bad_alloc*>(&e)) {
+    std::fprintf(stderr,
+                 "ravel: out of memory: the scene needs more memory than this machine could give (scene checks "
+                 "estimate it before a run; other programs may have taken it since); make the fabric smaller or "
+                 "coarser, or use fewer --jobs\n");
     return exit_failure;
   }
   std::fprintf(stderr, "ravel: error: %s\n", e.what());

@@ -21,16 +21,14 @@ struct CommonArgs {
   std::vector<std::string> overrides;  // --set k=v, in order
   std::string out_dir;
   int threads = -1;                                       // -1: as the scene says
-  std::map<std::string, std::string> flags;               // --name value / --name=value (last wins)
-  std::map<std::string, std::vector<std::string>> multi;  // every value of repeatable flags
+  std::map<std::string, std::string> flags;               // --name value / --name=value (the last of repeatable ones)
+  std::map<std::string, std::vector<std::string>> multi;  // every value given, in order
   std::vector<std::string> switches;                      // --name without value
 };
 
-// `value_flags`: flags that take a value; `switch_flags`: flags without; `repeatable`:
-// value flags that may repeat. Throws UsageError for anything else.
-CommonArgs parse_args(const std::vector<std::string>& args, const std::vector<std::string>& value_flags,
-                      const std::vector<std::string>& switch_flags = {},
-                      const std::vector<std::string>& repeatable = {});
+// The options of `command` as app/commands_table.cpp lists them; anything else, or a
+// single-valued option given twice, throws UsageError.
+CommonArgs parse_args(const std::vector<std::string>& args, const std::string& command);
 
 // The scene file the arguments name: the default scene when none, a bare name finds the
 // shipped scene of that name.

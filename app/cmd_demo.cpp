@@ -13,7 +13,7 @@ namespace ravel::app {
 
 int cmd_demo(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"size"}, {"list", "quick", "quiet"});
+    CommonArgs a = parse_args(args, "demo");
     const bool quick = has_switch(a, "quick");
     if (has_switch(a, "list") || a.scene_path.empty()) {
       std::printf("ravel demos (ravel demo NAME --out DIR; in the app: the Demos menu):\n\n");

@@ -407,8 +407,7 @@ std::vector<std::string> shipped_scenes() {
 
 int cmd_gui(const Args& args) {
   try {
-    CommonArgs a = parse_args(
-        args, {"frames", "screenshot", "do", "pause-at-us", "view", "field", "size", "export-dir"}, {"paused"}, {"do"});
+    CommonArgs a = parse_args(args, "gui");
     long frames = -1;
     if (a.flags.count("frames")) {
       char* end = nullptr;

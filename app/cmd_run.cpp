@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
@@ -72,10 +73,36 @@ void inject_test_fault(Simulation& sim) {
   }
 }
 
+// A run owns its output folder's run files: the ones an earlier run into the same --out
+// wrote (frames/frame_*.png, vtk/frame_*.vtu and frame.pvd, history.csv, summary.json,
+// scene.toml) go before this one starts, so ParaView's series and the frames never mix two
+// runs. Other files are left alone.
+void clear_earlier_run(const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  int removed = 0;
+  auto remove_matching = [&](const fs::path& sub, const std::string& prefix, const std::string& ext) {
+    if (!fs::is_directory(sub, ec)) return;
+    for (const auto& entry : fs::directory_iterator(sub, ec)) {
+      const std::string n = entry.path().filename().string();
+      if (entry.is_regular_file(ec) && n.rfind(prefix, 0) == 0 && entry.path().extension() == ext &&
+          fs::remove(entry.path(), ec))
+        ++removed;
+    }
+  };
+  remove_matching(fs::path(dir) / "frames", "frame_", ".png");
+  remove_matching(fs::path(dir) / "vtk", "frame_", ".vtu");
+  remove_matching(fs::path(dir) / "vtk", "frame", ".pvd");
+  for (const char* f : {"history.csv", "summary.json", "scene.toml"})
+    if (fs::remove(fs::path(dir) / f, ec)) ++removed;
+  if (removed > 0)
+    std::fprintf(stderr, "ravel: %s held an earlier run: its %d run files were removed first\n", dir.c_str(), removed);
+}
+
 void print_summary_line(const Summary& s, const std::string& out_dir) {
-  std::printf("%s: %s (%s), model %s %s, %d nodes, %ld steps in %.2f s\n", s.scene_name.c_str(), to_string(s.status),
-              to_string(s.end_reason), s.model.c_str(), s.contact_model.c_str(), s.node_count, s.step_count,
-              s.wall_time_s);
+  std::printf("%s: %s (%s), model %s %s, %d of the fabric's %d nodes, %ld steps in %.2f s\n", s.scene_name.c_str(),
+              to_string(s.status), to_string(s.end_reason), s.model.c_str(), s.contact_model.c_str(),
+              s.modelled_node_count, s.node_count, s.step_count, s.wall_time_s);
   if (s.perforated)
     std::printf("  perforated at %.1f us, residual velocity %.1f m/s, energy absorbed %.2f J\n",
                 s.perforation_time_s * 1e6, s.residual_velocity_mps, s.energy_absorbed_J);
@@ -85,12 +112,24 @@ void print_summary_line(const Summary& s, const std::string& out_dir) {
               s.energy_balance_error);
   if (s.status == RunStatus::diverged || s.status == RunStatus::interrupted) std::printf("  %s\n", s.diagnosis.c_str());
   for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
-  if (!out_dir.empty()) std::printf("  results in %s/ (summary.json, history.csv)\n", out_dir.c_str());
+  if (!out_dir.empty()) {
+    // Every output this run wrote (the folder was cleared of an earlier run's first).
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    std::string what = "summary.json, history.csv, scene.toml";
+    int pngs = 0;
+    if (fs::is_directory(out_dir + "/frames", ec))
+      for (const auto& e : fs::directory_iterator(out_dir + "/frames", ec))
+        pngs += e.path().filename().string().rfind("frame_", 0) == 0 && e.path().extension() == ".png";
+    if (pngs) what += ", frames/ (" + std::to_string(pngs) + " PNG)";
+    if (fs::exists(out_dir + "/vtk/frame.pvd", ec)) what += ", vtk/frame.pvd";
+    std::printf("  results in %s/ (%s)\n", out_dir.c_str(), what.c_str());
+  }
 }
 
 int cmd_run(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"frames", "view", "field"}, {"quiet", "vtk"});
+    CommonArgs a = parse_args(args, "run");
     if (a.out_dir.empty()) throw UsageError("run needs --out DIR");
 #ifdef RAVEL_HAVE_SNAPSHOT
     render::RecorderOptions rec;
@@ -112,6 +151,7 @@ int cmd_run(const Args& args) {
     // Said before a run that may take hours, not only in the summary at its end.
     for (const auto& w : scene.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     prepare_output_dir(a.out_dir);
+    clear_earlier_run(a.out_dir);
     install_signal_handlers();
     Simulation sim(scene);
 #ifdef RAVEL_HAVE_SNAPSHOT
@@ -160,9 +200,16 @@ int cmd_run(const Args& args) {
   }
 }
 
-int cmd_keys(const Args&) {
+int cmd_keys(const Args& args) {
+  try {
+    parse_args(args, "keys");  // no options: anything given is an error
+  } catch (const std::exception& e) {
+    return report_error(e);
+  }
+  std::printf("%-38s %-6s %-16s %-22s %s\n", "key", "unit", "default", "allowed", "meaning");
   for (const auto& k : scene_keys())
-    std::printf("%-32s %-8s %s\n", k.key.c_str(), k.unit.c_str(), k.description.c_str());
+    std::printf("%-38s %-6s %-16s %-22s %s\n", k.key.c_str(), k.unit.c_str(), k.default_value.c_str(), k.range.c_str(),
+                k.description.c_str());
   return 0;
 }
 

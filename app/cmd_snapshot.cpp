@@ -48,7 +48,7 @@ void parse_size(const std::string& text, int* w, int* h) {
 
 int cmd_snapshot(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"at", "view", "size", "field", "range"}, {"quiet"});
+    CommonArgs a = parse_args(args, "snapshot");
     if (a.out_dir.empty()) throw UsageError("snapshot needs --out DIR");
     if (!a.flags.count("at")) throw UsageError("snapshot needs --at TIME_US[,TIME_US...]");
     const std::vector<double> times_us = parse_times_us(a.flags["at"]);
@@ -89,9 +89,19 @@ int cmd_snapshot(const Args& args) {
                      "ravel: warning: the run ended at %.2f us (%s); the image for %.2f us shows "
                      "that final state\n",
                      sim.time_s() * 1e6, to_string(sim.summary().end_reason), t_us);
-      char name[256];
-      std::snprintf(name, sizeof name, "%s_%s_t%07.2fus.png", scene.name.c_str(), render::to_string(view.view), t_us);
-      const std::string path = a.out_dir + "/" + name;
+      // <scene>[+<tag of the --set overrides>]_<view>[_<field>]_t<T>us.png: the name never
+      // leaves --out, and images of other overrides or fields do not overwrite these.
+      std::string stem = safe_file_name(scene.name);
+      if (!a.overrides.empty()) {
+        std::string all;
+        for (const auto& o : a.overrides) all += o + "\n";
+        stem += "+" + short_hash(all);
+      }
+      stem += std::string("_") + render::to_string(view.view);
+      if (view.field != render::ViewOptions{}.field) stem += std::string("_") + render::to_string(view.field);
+      char time_tag[64];
+      std::snprintf(time_tag, sizeof time_tag, "_t%07.2fus.png", t_us);
+      const std::string path = a.out_dir + "/" + stem + time_tag;
       if (!renderer->render_png(frame, view, width, height, path, &error)) throw OutputError(path + ": " + error);
       ++written;
       if (!quiet) std::printf("%s  (t = %.2f us)\n", path.c_str(), frame.time_s * 1e6);

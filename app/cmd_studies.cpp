@@ -67,7 +67,7 @@ bool progress_wanted(const CommonArgs& a) {
 
 int cmd_sweep(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"vary", "jobs", "shard"}, {"quiet", "no-extend"}, {"vary"});
+    CommonArgs a = parse_args(args, "sweep");
     if (!a.multi.count("vary"))
       throw UsageError("sweep needs at least one --vary key=start:stop:step or key=v1,v2,...");
     check_out_dir(a.out_dir);
@@ -79,6 +79,7 @@ int cmd_sweep(const Args& args) {
     opt.jobs = jobs_from(a);
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
     opt.extend_undecided = !has_switch(a, "no-extend");
+    opt.restart = has_switch(a, "restart");
     if (a.flags.count("shard")) opt.shard = studies::parse_shard(a.flags["shard"]);
     std::vector<studies::Vary> vary;
     std::vector<std::string> keys;
@@ -135,7 +136,7 @@ int cmd_sweep(const Args& args) {
 
 int cmd_limit(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"tolerance", "start", "max-runs"}, {"no-fit", "quiet"});
+    CommonArgs a = parse_args(args, "limit");
     check_out_dir(a.out_dir);
     const std::string scene_path = scene_path_from(a);
     const std::vector<std::string> ov = overrides_from(a);
@@ -147,9 +148,15 @@ int cmd_limit(const Args& args) {
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     const bool verbose = progress_wanted(a);
-    auto shoot = studies::scene_shooter(scene_path, ov, &interrupt_flag());
+    // Finished runs are kept in DIR/runs/: an interrupted search resumes from them.
+    auto shoot = studies::scene_shooter(scene_path, ov, &interrupt_flag(), {}, a.out_dir);
+    std::vector<studies::Shot> finished;
+    int resumed = 0;
     auto logged = [&](double v, const std::string& why) {
-      const auto s = shoot(v, why);
+      auto s = shoot(v, why);
+      s.purpose = why;
+      finished.push_back(s);
+      resumed += s.resumed;
       if (verbose) {
         std::printf("  %-7s %8.2f m/s: %s", why.c_str(), v,
                     s.perforated ? "perforated"
@@ -157,7 +164,7 @@ int cmd_limit(const Args& args) {
                                  : "undecided at its end time (left out)");
         if (s.perforated) std::printf(", residual %.1f m/s", s.residual_velocity_mps);
         if (s.failed) std::printf(" -- FAILED: %s", s.error.c_str());
-        std::printf("  [%.1f s]\n", s.wall_time_s);
+        std::printf(s.resumed ? "  [kept from an earlier run, %.1f s]\n" : "  [%.1f s]\n", s.wall_time_s);
         std::fflush(stdout);
       }
       return s;
@@ -170,7 +177,18 @@ int cmd_limit(const Args& args) {
       r = studies::find_ballistic_limit(logged, lo, !has_switch(a, "no-fit"));
     } catch (const std::exception& e) {
       if (interrupt_flag().load()) {
-        std::fprintf(stderr, "ravel: interrupted; nothing written\n");
+        // Keep what finished: limit.json lists the finished runs (no limit yet), and DIR/runs/
+        // lets the same command resume without redoing them.
+        studies::LimitResult part;
+        part.runs = finished;
+        part.interrupted = true;
+        part.warnings.push_back("interrupted after " + std::to_string(finished.size()) +
+                                " runs; rerun the same command to resume");
+        write_file_atomic(a.out_dir + "/limit.json", studies::limit_json(part, lo, scene_path, ov));
+        std::fprintf(stderr,
+                     "ravel: interrupted; %zu finished runs kept in %s/limit.json and %s/runs/ (rerun the same "
+                     "command to resume)\n",
+                     finished.size(), a.out_dir.c_str(), a.out_dir.c_str());
         return exit_interrupted;
       }
       throw;
@@ -213,6 +231,7 @@ int cmd_limit(const Args& args) {
     std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
                 r.ballistic_limit_mps, r.lo_mps, r.hi_mps, r.runs.size(), r.wall_time_s,
                 r.wall_time_s > 0 ? r.runs.size() / (r.wall_time_s / 3600) : 0.0);
+    if (resumed) std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
     if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
     if (r.fit.ok)
       std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
@@ -228,7 +247,7 @@ int cmd_limit(const Args& args) {
 
 int cmd_paper(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"jobs"}, {"quick", "quiet"});
+    CommonArgs a = parse_args(args, "paper");
     check_out_dir(a.out_dir);
     studies::PaperOptions opt;
     opt.scene_path = scene_path_from(a);

@@ -48,8 +48,7 @@ void progress_line(bool verbose, const std::string& s) {
 int cmd_tradeoff(const Args& args) {
   try {
     CommonArgs a =
-        parse_args(args, {"knob", "only", "around", "cost", "jobs", "note", "date", "tolerance", "reference"},
-                   {"quick", "limit", "quiet"}, {"knob", "reference"});
+        parse_args(args, "tradeoff");
     if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
     studies::TradeoffOptions opt;
     opt.scene_path = scene_path_from(a);
@@ -156,7 +155,7 @@ int cmd_tradeoff(const Args& args) {
 
 int cmd_stability(const Args& args) {
   try {
-    CommonArgs a = parse_args(args, {"jobs", "map"}, {"quick", "quiet"}, {"map"});
+    CommonArgs a = parse_args(args, "stability");
     if (a.out_dir.empty()) throw UsageError("stability needs --out DIR");
     studies::StabilityOptions opt;
     opt.scene_path = scene_path_from(a);

@@ -663,6 +663,9 @@ void draw_status_panel(GuiApp& app) {
   ImGui::Text("%s model, %s", s.model.c_str(), s.contact_model.c_str());
   if (ImGui::IsItemHovered() && !s.model_reason.empty()) ImGui::SetTooltip("%s", s.model_reason.c_str());
   ImGui::Text("%d nodes, %d elements", s.node_count, s.element_count);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("the whole fabric; the solver models %d nodes and %d elements (%s)", s.modelled_node_count,
+                      s.modelled_element_count, s.model.c_str());
   ImGui::Text("%d crossings, dt %.1f ns", s.crossing_count, s.dt_s * 1e9);
   ImGui::Separator();
   const double vel = v.history.empty() ? s.impact_velocity_mps : v.history.back().projectile_velocity_mps;
@@ -688,7 +691,7 @@ void draw_status_panel(GuiApp& app) {
 std::string next_screenshot_path(const GuiApp& app) {
   for (int i = 1;; ++i) {
     char name[96];
-    std::snprintf(name, sizeof name, "/%s_screenshot_%03d.png", app.view.scene.name.c_str(), i);
+    std::snprintf(name, sizeof name, "/%s_screenshot_%03d.png", safe_file_name(app.view.scene.name).c_str(), i);
     const std::string p = app.export_dir + name;
     if (!std::filesystem::exists(p) || i > 999) return p;
   }
@@ -708,7 +711,7 @@ void export_results(GuiApp& app) {
 void export_scene(GuiApp& app) {
   try {
     prepare_output_dir(app.export_dir);
-    const std::string path = app.export_dir + "/" + app.view.scene.name + ".toml";
+    const std::string path = app.export_dir + "/" + safe_file_name(app.view.scene.name) + ".toml";
     write_file_atomic(path, scene_to_toml(app.view.scene));
     set_notice(app, "wrote " + path + " (open it with: ravel gui " + path + ")", false);
   } catch (const std::exception& e) {

@@ -4,31 +4,8 @@
 #include <string>
 
 #include "commands.h"
+#include "commands_table.h"
 #include "omp_env.h"
-
-namespace {
-
-void usage() {
-  std::printf(
-      "ravel: yarn-level simulation of a projectile striking woven fabric armour\n\n"
-      "usage: ravel [COMMAND] [SCENE] [--set section.key=value ...] [options]\n\n"
-      "commands:\n"
-      "  gui [SCENE]              the interactive app (default when a display exists)\n"
-      "  run [SCENE] --out DIR    one headless run: DIR/history.csv, DIR/summary.json\n"
-      "  snapshot [SCENE] --at T_US[,T_US..] --out DIR   PNG images of the fabric\n"
-      "  keys                     list every scene key with its unit\n"
-      "  sweep [SCENE] --vary key=a:b:step|v1,v2 --out DIR [--jobs N] [--shard i/n]   parameter sweep\n"
-      "  limit [SCENE] --out DIR [--tolerance MPS]   ballistic limit + Lambert-Jonas fit\n"
-      "  paper --out DIR [--quick]  reproduce the paper's studies, DIR/report.md\n"
-      "  demo NAME --out DIR      a guided demo's key frames as captioned PNGs (demo --list)\n"
-      "  tradeoff [SCENE] --out DIR [--quick] [--limit]   error against cost of every speed/accuracy knob\n"
-      "  stability [SCENE] --out DIR [--quick]   map where the methods fail (dt, iterations, velocity)\n"
-      "  help                     this text\n\n"
-      "SCENE is a TOML file or the name of a shipped scene (default: twaron_ct716).\n"
-      "Exit codes: 0 done, 1 output error, 2 bad input, 3 run diverged, 130 interrupted.\n");
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace ravel::app;
@@ -40,8 +17,29 @@ int main(int argc, char** argv) {
   Args rest;
   for (int i = 2; i < argc; ++i) rest.push_back(argv[i]);
   if (cmd == "help" || cmd == "--help" || cmd == "-h") {
-    usage();
+    if (rest.empty()) {
+      print_usage();
+      return 0;
+    }
+    const Command* c = find_command(rest[0]);
+    if (!c) {
+      std::fprintf(stderr, "ravel: no command '%s' (see 'ravel help')\n", rest[0].c_str());
+      return 2;
+    }
+    print_command_help(*c);
     return 0;
+  }
+  if (cmd == "--version" || cmd == "version") {
+    print_version();
+    return 0;
+  }
+  // `ravel COMMAND --help` (or -h) anywhere among its arguments.
+  if (const Command* c = find_command(cmd)) {
+    for (const auto& r : rest)
+      if (r == "--help" || r == "-h") {
+        print_command_help(*c);
+        return 0;
+      }
   }
   if (cmd == "run") return cmd_run(rest);
   if (cmd == "keys") return cmd_keys(rest);

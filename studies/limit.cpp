@@ -7,7 +7,12 @@
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <filesystem>
 #include <stdexcept>
+
+#include "results.h"
+#include "sweep.h"
+#include "version.h"
 
 namespace ravel::studies {
 
@@ -241,14 +246,80 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   return res;
 }
 
+namespace {
+
+nlohmann::ordered_json shot_to_json(const Shot& s) {
+  nlohmann::ordered_json q;
+  q["velocity_mps"] = s.velocity_mps;
+  q["purpose"] = s.purpose;
+  q["perforated"] = s.perforated;
+  q["residual_velocity_mps"] = s.residual_velocity_mps;
+  q["energy_absorbed_J"] = s.energy_absorbed_J;
+  q["perforation_time_s"] =
+      s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
+  q["end_reason"] = s.end_reason;
+  q["decided"] = s.decided;
+  q["failed"] = s.failed;
+  if (s.failed) q["error"] = s.error;
+  q["broken_warp_yarns"] = s.broken_warp_yarns;
+  q["broken_weft_yarns"] = s.broken_weft_yarns;
+  q["wall_time_s"] = s.wall_time_s;
+  return q;
+}
+
+Shot shot_from_json(const nlohmann::json& q) {
+  Shot s;
+  auto num = [&](const char* k, double d) { return q.contains(k) && q[k].is_number() ? q[k].get<double>() : d; };
+  s.velocity_mps = num("velocity_mps", 0);
+  s.purpose = q.value("purpose", "");
+  s.perforated = q.value("perforated", false);
+  s.residual_velocity_mps = num("residual_velocity_mps", 0);
+  s.energy_absorbed_J = num("energy_absorbed_J", 0);
+  s.perforation_time_s = num("perforation_time_s", -1);
+  s.end_reason = q.value("end_reason", "");
+  s.decided = q.value("decided", true);
+  s.failed = q.value("failed", false);
+  s.error = q.value("error", "");
+  s.broken_warp_yarns = q.value("broken_warp_yarns", 0);
+  s.broken_weft_yarns = q.value("broken_weft_yarns", 0);
+  s.wall_time_s = num("wall_time_s", 0);
+  return s;
+}
+
+}  // namespace
+
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
-                      const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run) {
+                      const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run,
+                      const std::string& cache_dir) {
+  // What a kept run must have been run with to stand for a run now: the resolved scene
+  // (velocity aside) and the ravel build.
+  std::string fingerprint;
+  if (!cache_dir.empty()) {
+    Scene base = load_scene(scene_path, overrides);
+    base.projectile.velocity_mps = 0;
+    fingerprint = scene_to_toml(base) + "\nravel " + version() + " (source " + source_commit() + ")";
+  }
   return [=](double v, const std::string&) {
     auto ov = overrides;
     char b[64];
     std::snprintf(b, sizeof b, "projectile.velocity_mps=%.6f", v);
     ov.push_back(b);
     ov.push_back("output.progress=false");
+    std::string kept;
+    if (!cache_dir.empty()) {
+      char name[64];
+      std::snprintf(name, sizeof name, "/runs/v%012.6f.json", v);
+      kept = cache_dir + name;
+      std::error_code ec;
+      if (std::filesystem::exists(kept, ec)) {
+        const auto j = nlohmann::json::parse(read_text_file(kept), nullptr, false);
+        if (!j.is_discarded() && j.value("fingerprint", std::string()) == fingerprint && j.contains("shot")) {
+          Shot shot = shot_from_json(j["shot"]);
+          shot.resumed = true;
+          return shot;
+        }
+      }
+    }
     Scene scene = load_scene(scene_path, ov);
     Simulation sim(scene);
     sim.run(interrupt);
@@ -274,6 +345,13 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     shot.wall_time_s = s.wall_time_s;
     shot.broken_warp_yarns = s.broken_warp_yarns;
     shot.broken_weft_yarns = s.broken_weft_yarns;
+    if (!kept.empty()) {  // kept for a rerun after an interruption
+      prepare_output_dir(cache_dir + "/runs");
+      nlohmann::ordered_json j;
+      j["fingerprint"] = fingerprint;
+      j["shot"] = shot_to_json(shot);
+      write_file_atomic(kept, j.dump(2) + "\n");
+    }
     return shot;
   };
 }
@@ -301,24 +379,12 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   j["lambert_jonas"] = f;
   j["runs"] = nlohmann::ordered_json::array();
   for (const auto& s : r.runs) {
-    nlohmann::ordered_json q;
-    q["velocity_mps"] = s.velocity_mps;
-    q["purpose"] = s.purpose;
-    q["perforated"] = s.perforated;
-    q["residual_velocity_mps"] = s.residual_velocity_mps;
-    q["energy_absorbed_J"] = s.energy_absorbed_J;
-    q["perforation_time_s"] =
-        s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
-    q["end_reason"] = s.end_reason;
-    q["decided"] = s.decided;
-    q["failed"] = s.failed;
-    if (s.failed) q["error"] = s.error;
-    q["broken_warp_yarns"] = s.broken_warp_yarns;
-    q["broken_weft_yarns"] = s.broken_weft_yarns;
-    q["wall_time_s"] = s.wall_time_s;
+    auto q = shot_to_json(s);
+    if (s.resumed) q["resumed"] = true;
     j["runs"].push_back(q);
   }
   j["warnings"] = r.warnings;
+  j["interrupted"] = r.interrupted;
   j["scene"] = scene_path;
   j["overrides"] = overrides;
   j["start_mps"] = opt.start_mps;

@@ -29,6 +29,7 @@ struct Shot {
   std::string purpose;  // bracket | bisect | fit
   bool failed = false;  // the run diverged: its outcome means nothing
   std::string error;    // why
+  bool resumed = false;  // read back from a kept run, not run now
 };
 
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
@@ -65,6 +66,7 @@ struct LimitResult {
   LambertJonas fit;
   std::vector<std::string> warnings;
   double wall_time_s = 0;
+  bool interrupted = false;  // the search stopped at an interruption: runs holds what finished
 };
 
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
@@ -73,8 +75,12 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
 // `on_run` (optional) sees each finished Simulation (e.g. to keep a frame). A diverged
 // run comes back with failed = true (the search stops there: a bracket built on it would
 // be meaningless); an interrupted one throws std::runtime_error.
+// With `cache_dir`, each finished run is kept as cache_dir/runs/v<V>.json and a later call
+// for the same velocity, scene and ravel build reads it back (Shot::resumed) instead of
+// running again: an interrupted search resumes where it stopped.
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
-                      const std::atomic<bool>* interrupt = nullptr, std::function<void(const Simulation&)> on_run = {});
+                      const std::atomic<bool>* interrupt = nullptr, std::function<void(const Simulation&)> on_run = {},
+                      const std::string& cache_dir = "");
 
 // limit.json: the result, the fit, every run, and what was run.
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,

@@ -329,7 +329,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
               if (!e.keep_frame || !sim.summary().perforated) return;
               const double v = sim.scene().projectile.velocity_mps;
               if (v < e.frame_v) e.frame_v = v, e.frame = sim.frame();
-            });
+            }, e.dir);
             e.result = find_ballistic_limit(shoot, lo, false);
             std::lock_guard<std::mutex> lock(mu);
             limit_runs += int(e.result.runs.size());

@@ -10,11 +10,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
 #include "results.h"
+#include "version.h"
 
 namespace ravel::studies {
 
@@ -370,25 +372,59 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
                       const std::atomic<bool>* interrupt) {
   // Cases are named by their varied settings only: a folder that holds cases of another
-  // base scene or --set would be silently mixed in. Refuse it.
-  for (const auto& c : to_run) {
+  // base scene, --set, scene file content or ravel build would be silently mixed in.
+  // Refuse it, naming what changed (or, with opt.restart, remove those cases first).
+  const std::string base_toml = scene_to_toml(load_scene(opt.scene_path, opt.overrides));
+  const std::string build = std::string(version()) + " (source " + source_commit() + ")";
+  for (const auto& c : all_cases) {
     if (!case_finished(opt.out_dir, c)) continue;
     std::string text;
     try {
       text = read_text_file(case_dir(opt.out_dir, c) + "/case.json");
     } catch (const OutputError&) {
-      continue;  // made by hand or by an older ravel: nothing to compare
+      continue;  // made by hand: nothing to compare
     }
     const auto cj = nlohmann::json::parse(text, nullptr, false);
     if (cj.is_discarded()) continue;
     const auto ov = cj.value("base_overrides", std::vector<std::string>{});
     const auto scene = cj.value("base_scene", std::string());
+    const auto toml = cj.value("base_scene_toml", std::string());
+    const auto made_by = cj.value("ravel", std::string("an older ravel"));
+    std::string changed;
     if (ov != opt.overrides || scene != opt.scene_path) {
       std::string had;
       for (const auto& o : ov) had += " --set " + o;
-      throw StudyError("--out " + opt.out_dir + ": holds finished cases of a different sweep (scene " + scene +
-                       (had.empty() ? ", no --set" : "," + had) +
-                       "); rerun with the same scene and --set to resume, or use another folder");
+      changed = "scene " + scene + (had.empty() ? ", no --set" : "," + had);
+    } else if (toml != base_toml) {
+      // Name the keys whose lines differ (scene_to_toml writes one key per line).
+      auto keys_of = [](const std::string& t) {
+        std::map<std::string, std::string> m;
+        std::istringstream in(t);
+        std::string section;
+        for (std::string line; std::getline(in, line);) {
+          if (line.rfind("[", 0) == 0) section = line.substr(1, line.find(']') - 1) + ".";
+          const auto eq = line.find(" = ");
+          if (eq != std::string::npos && line[0] != '#') m[section + line.substr(0, eq)] = line.substr(eq + 3);
+        }
+        return m;
+      };
+      const auto a = keys_of(toml), b = keys_of(base_toml);
+      std::string keys;
+      for (const auto& [k, v] : b)
+        if (!a.count(k) || a.at(k) != v) keys += (keys.empty() ? "" : ", ") + k;
+      changed = "the scene file's content changed since (" + (keys.empty() ? std::string("its text") : keys) + ")";
+    } else if (made_by != build) {
+      changed = "made by ravel " + made_by + ", this is ravel " + build;
+    }
+    if (!changed.empty()) {
+      if (!opt.restart)
+        throw StudyError("--out " + opt.out_dir + ": holds finished cases of a different sweep (" + changed +
+                         "); rerun with the same scene, --set and ravel to resume, --restart to start over, or use "
+                         "another folder");
+      std::error_code ec;
+      for (const auto& d : all_cases)
+        if (fs::exists(case_dir(opt.out_dir, d) + "/case.json", ec)) fs::remove_all(case_dir(opt.out_dir, d), ec);
+      fs::remove(opt.out_dir + "/results.csv", ec);
     }
     break;  // one finished case tells
   }
@@ -465,6 +501,8 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
         for (const auto& [k, v] : c.settings) cj["settings"][k] = v;
         cj["base_scene"] = opt.scene_path;
         cj["base_overrides"] = opt.overrides;
+        cj["base_scene_toml"] = base_toml;  // the resolved scene a resume must match
+        cj["ravel"] = build;
         write_file_atomic(tmp + "/case.json", cj.dump(2) + "\n");
         if (hooks.on_simulation) {
           std::lock_guard<std::mutex> lock(mu);

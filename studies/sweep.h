@@ -68,6 +68,9 @@ struct SweepOptions {
   // solver.max_end_time_us, so that no undecided run counts as stopped (SPEC §8). false: the
   // scene's end time is a hard end (`ravel sweep --no-extend`).
   bool extend_undecided = true;
+  // The folder holds finished cases of another sweep (another scene, --set, scene file
+  // content or ravel build): false refuses to mix them in, true removes them first.
+  bool restart = false;
 };
 
 // One finished (or previously finished) case.

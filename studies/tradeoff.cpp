@@ -365,7 +365,8 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
           ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
           ov.push_back("output.progress=false");
           try {
-            auto r = find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt), opt.limit_options, false);
+            auto r = find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, {}, opt.out_dir + "/limit/" + name),
+                                          opt.limit_options, false);
             if (interrupt && interrupt->load()) return;
             write_file_atomic(path, limit_json(r, opt.limit_options, opt.scene_path, ov));
             if (r.converged) v = r.ballistic_limit_mps;
@@ -694,12 +695,42 @@ std::string shipped_tradeoff_path(const Scene& scene) {
   return fs::exists(p, ec) ? p : "";
 }
 
+namespace {
+
+// The scene as a measurement sees it: the speed/accuracy knobs (what a suggestion changes)
+// and what does not change the physics (threads, SIMD, outputs, the name) set aside.
+std::string physics_of(Scene s) {
+  const Scene d;
+  s.name = d.name;
+  s.solver.dt_factor = d.solver.dt_factor;
+  s.solver.contact_iterations = d.solver.contact_iterations;
+  s.solver.precision = d.solver.precision;
+  s.solver.model = d.solver.model;
+  s.solver.symmetry = d.solver.symmetry;
+  s.fabric.yarns_per_element = d.fabric.yarns_per_element;
+  s.solver.threads = d.solver.threads;
+  s.solver.simd = d.solver.simd;
+  s.output = d.output;
+  return scene_to_toml(s);
+}
+
+}  // namespace
+
 std::vector<std::string> shipped_tradeoff_suggestions(const Scene& scene) {
   const std::string path = shipped_tradeoff_path(scene);
   if (path.empty()) return {};
   try {
     // Within 1 %; for a knob with nothing there, within 5 % (each line says which).
     const std::string text = read_text_file(path);
+    // Only for the scene it was measured on: the shipped scene of that name with the
+    // recorded overrides, apart from the knobs themselves.
+    {
+      const auto j = ojson::parse(text, nullptr, false);
+      if (j.is_discarded() || !j.is_object()) return {};
+      const auto ov = j.value("overrides", std::vector<std::string>{});
+      const Scene measured = load_scene(assets_dir() + "/scenes/" + scene.name + ".toml", ov);
+      if (physics_of(measured) != physics_of(scene)) return {};
+    }
     auto out = tradeoff_suggestions(scene, text, 0.01);
     for (const auto& s5 : tradeoff_suggestions(scene, text, 0.05)) {
       const std::string knob = s5.substr(0, s5.find('='));

@@ -10,7 +10,7 @@ fail() { echo "FAIL: $*"; exit 1; }
   fail "snapshot exited $?"
 n=$(ls "$out"/*.png 2>/dev/null | wc -l)
 [ "$n" -eq 2 ] || fail "expected 2 PNGs, found $n"
-f="$out/twaron_ct716_top_t0005.00us.png"
+f="$out/twaron_ct716_top_velocity_t0005.00us.png"  # a field other than strain is named
 [ -f "$f" ] || fail "missing $f"
 # PNG signature and IHDR width/height (bytes 16..23, big endian).
 sig=$(head -c 8 "$f" | od -An -tx1 | tr -d ' \n')
