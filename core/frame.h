@@ -31,6 +31,10 @@ struct Frame {
   std::vector<std::uint8_t> elem_family;      // 0 = warp (runs along y), 1 = weft (runs along x)
   std::vector<std::uint8_t> elem_broken;      // 1 = failed and removed
   std::vector<std::uint32_t> elem_yarn;       // yarn id (0.. warp count-1 are warp, then weft)
+  // Per modelled yarn: its grid index (warp: I, at x = I L0; weft: J, at y = J L0) and family;
+  // what makes yarn ids unique across the mirrored copies (write_vtu).
+  std::vector<std::int32_t> yarn_grid;
+  std::vector<std::uint8_t> yarn_family;
   std::vector<float> elem_strain;             // engineering strain
   std::vector<float> elem_stress_pa;          // axial stress
   float failure_strain = 0.052f;

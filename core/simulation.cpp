@@ -488,6 +488,12 @@ Summary Simulation::summary() const {
                          std::to_string(d.skipped_nodes) + " times" +
                          at(d.first_skip_time, d.first_skip_i, d.first_skip_j) +
                          "; the 3 x 3 search assumes at most one; lower solver.dt_factor");
+  if (d.repaired)
+    s.warnings.push_back("nearest-pair search: the tracked node pair of a crossing moved more than one node " +
+                         std::to_string(d.repaired) + " times while its yarns moved less than half a node against "
+                         "each other" + at(d.first_repair_time, d.first_repair_i, d.first_repair_j) +
+                         ": the yarns' shape changed (folded, bunched or apart near the projectile), they did not "
+                         "outrun the search; a smaller time step does not change it");
   if (d.ravelled)
     s.warnings.push_back(
         std::to_string(d.ravelled) +
@@ -562,6 +568,8 @@ Frame Simulation::frame() const {
     f.elem_strain[e] = float(S.strain(e));
     f.elem_stress_pa[e] = float(S.stress(e));
   }
+  f.yarn_grid.assign(m.yarn_grid.begin(), m.yarn_grid.end());
+  f.yarn_family.assign(m.yarn_family.begin(), m.yarn_family.end());
   f.failure_strain = float(m.failure_strain);
   f.yarn_diameter_m = float(0.5 * m.thickness);
   f.mirror_x = m.mirror_x;

@@ -106,9 +106,11 @@ class SolverT final : public Solver {
     cr_fn_step_.assign(nc, 0.0);
     cr_u_.assign(nc, 0.0);
     cr_stick_e_.assign(nc, 0.0);
+    cr_last_.resize(nc);
     for (int c = 0; c < nc; ++c) {
       cr_kw_[c] = model_.crossings[c].warp_node;
       cr_kf_[c] = model_.crossings[c].weft_node;
+      cr_last_[c] = {cr_kw_[c], cr_kf_[c], pair_offset(c, cr_kw_[c], cr_kf_[c])};
     }
     xp_ = model_.projectile_x0.cast<Real>();
     vp_ = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
@@ -1073,18 +1075,34 @@ class SolverT final : public Solver {
     double fsum = 0, usum = 0, esum = 0;
     int sliding = 0, stuck = 0;
     for (int c = 0; c < nc; ++c) {
+      // How far the two yarns' material moved against each other this step: the offset of
+      // last step's tracked node pair, then and now (the pair may have been re-chosen since).
+      const LastPair was = cr_last_[c];
+      const Real moved = (pair_offset(c, was.kw, was.kf) - was.offset).norm();
+      cr_last_[c] = {cr_kw_[c], cr_kf_[c], pair_offset(c, cr_kw_[c], cr_kf_[c])};
       if (cr_active_[c]) {
         fsum += cr_fn_[c];
         usum += cr_u_[c];
         esum += cr_stick_e_[c];
         if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
+        // Material slip: the stick point's advance, but never faster than the yarns move
+        // against each other (a jump of the closest point along a kinked or re-paired
+        // yarn is not slip).
+        cr_slip_[c] = std::min(cr_slip_[c], double(moved) / double(model_.dt));
       }
-      const std::uint8_t ev = cr_event_[c];
+      std::uint8_t ev = cr_event_[c];
       if (!ev) continue;
       const Crossing& cr = model_.crossings[c];
       auto note = [&](long& count, double& t, int& i, int& j) {
         if (count++ == 0) t = time_, i = cr.grid_i, j = cr.grid_j;
       };
+      // A pair that moved more than one node while the yarns moved less than half a node
+      // against each other was re-chosen by the changed shape (yarns folded, bunched or apart
+      // near the projectile), not outrun: a smaller time step would not change it.
+      if ((ev & ev_skip) && moved < Real(0.5) * Real(model_.elem_rest[model_.yarn_elem_offset[cr.warp_yarn]])) {
+        ev &= std::uint8_t(~ev_skip);
+        note(diag_.repaired, diag_.first_repair_time, diag_.first_repair_i, diag_.first_repair_j);
+      }
       if (ev & ev_skip) note(diag_.skipped_nodes, diag_.first_skip_time, diag_.first_skip_i, diag_.first_skip_j);
       if (ev & ev_ravel) note(diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
       if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
@@ -1930,6 +1948,20 @@ class SolverT final : public Solver {
   std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
   std::vector<WindowIds> cr_win_;          // per crossing (load_window)
   std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
+  // Each crossing's tracked node pair at the end of the last step and the offset between
+  // its two nodes then (weft minus warp): how far the yarns moved against each other.
+  struct LastPair {
+    int kw, kf;
+    V3 offset;
+  };
+  std::vector<LastPair> cr_last_;
+  V3 pair_offset(int c, int kw, int kf) const {
+    const Crossing& cr = model_.crossings[c];
+    const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+    const int iw = model_.yarn_node(cr.warp_yarn, std::clamp(kw, 0, nw - 1));
+    const int jf = model_.yarn_node(cr.weft_yarn, std::clamp(kf, 0, nf - 1));
+    return x_[jf] - x_[iw];
+  }
   std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
   std::vector<CrossingImpulse> impulses_;
   std::vector<CrossingImpulse> held_records_;  // one thread: records touching held nodes (yarn_contact)

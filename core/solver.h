@@ -35,7 +35,10 @@ namespace ravel {
 
 // Counts of places where the method's assumptions broke (SPEC §4), with the first one.
 struct ContactDiagnostics {
-  long skipped_nodes = 0;   // a nearest pair moved more than one node in one step
+  long skipped_nodes = 0;   // yarns slid more than one node against each other in one step
+  long repaired = 0;        // the nearest pair moved more than one node, the yarns less than half a node
+  double first_repair_time = -1;
+  int first_repair_i = 0, first_repair_j = 0;
   long ravelled = 0;        // a yarn slipped off the end of its partner: crossing released
   long passed_through = 0;  // yarns found passed through each other by more than D
   long lost_segments = 0;   // both adjoining segments broken: crossing released

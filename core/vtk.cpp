@@ -2,6 +2,9 @@
 
 #include "results.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <sstream>
@@ -66,7 +69,12 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
   const std::size_t np = f.node_pos.size(), ne = std::min(f.elem_a.size(), f.elem_b.size());
   const std::size_t nc = copies.size();
 
+  // A copy mirrored across a plane repeats what lies on that plane: those points and cells
+  // are marked `duplicate` = 1, so a sum over the cells or points with duplicate = 0 counts
+  // the whole fabric once.
+  constexpr float kOnPlane = 1e-7f;  // m: nodes on a symmetry plane stay on it
   std::vector<float> points, velocity, slip;
+  std::vector<std::uint8_t> point_dup;
   points.reserve(np * nc * 3);
   velocity.reserve(np * nc * 3);
   for (const auto& m : copies)
@@ -76,10 +84,17 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       const auto v = i < f.node_vel.size() ? f.node_vel[i] : std::array<float, 3>{0, 0, 0};
       velocity.insert(velocity.end(), {v[0] * m[0], v[1] * m[1], v[2]});
       slip.push_back(i < f.node_slip_rate.size() ? f.node_slip_rate[i] : 0.0f);
+      point_dup.push_back((m[0] < 0 && std::abs(p[0]) < kOnPlane) || (m[1] < 0 && std::abs(p[1]) < kOnPlane));
     }
+  // Whole-fabric yarn ids: warp I -> I + hx, weft J -> (2 hx + 1) + J + hy, with the grid
+  // indices of a mirrored copy negated.
+  int hx = 0, hy = 0;
+  for (std::size_t y = 0; y < f.yarn_grid.size() && y < f.yarn_family.size(); ++y)
+    (f.yarn_family[y] == 0 ? hx : hy) = std::max(f.yarn_family[y] == 0 ? hx : hy, std::abs(f.yarn_grid[y]));
+  const bool have_grid = !f.yarn_grid.empty() && f.yarn_grid.size() == f.yarn_family.size();
 
   std::vector<std::int64_t> connectivity, offsets;
-  std::vector<std::uint8_t> types, broken, family, copy;
+  std::vector<std::uint8_t> types, broken, family, copy, cell_dup;
   std::vector<float> strain, ratio, stress;
   std::vector<std::int32_t> yarn;
   const float inv_fail = f.failure_strain > 0 ? 1.0f / f.failure_strain : 0.0f;
@@ -99,20 +114,55 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       stress.push_back(e < f.elem_stress_pa.size() ? f.elem_stress_pa[e] : 0.0f);
       broken.push_back(e < f.elem_broken.size() ? f.elem_broken[e] : 0);
       family.push_back(e < f.elem_family.size() ? f.elem_family[e] : 0);
-      yarn.push_back(e < f.elem_yarn.size() ? static_cast<std::int32_t>(f.elem_yarn[e]) : -1);
+      std::int32_t id = e < f.elem_yarn.size() ? static_cast<std::int32_t>(f.elem_yarn[e]) : -1;
+      bool dup = false;
+      if (have_grid && id >= 0 && std::size_t(id) < f.yarn_grid.size()) {
+        const bool warp = f.yarn_family[id] == 0;
+        const float sign = warp ? copies[c][0] : copies[c][1];
+        const int g = f.yarn_grid[id];
+        dup = sign < 0 && g == 0;
+        id = warp ? int(sign) * g + hx : (2 * hx + 1) + int(sign) * g + hy;
+      }
+      yarn.push_back(id);
       copy.push_back(static_cast<std::uint8_t>(c));
+      cell_dup.push_back(dup);
     }
 
   Appended app;
   std::ostringstream xml;
+  // The projectile as field data (a ParaView state can place a sphere / cylinder from it).
+  auto field = [&](const char* name, const char* type, int n, const std::string& values) {
+    xml << "      <DataArray type=\"" << type << "\" Name=\"" << name << "\" NumberOfTuples=\"1\"";
+    if (n > 1) xml << " NumberOfComponents=\"" << n << "\"";
+    xml << " format=\"ascii\">" << values << "</DataArray>\n";
+  };
+  auto vec = [](const std::array<float, 3>& v) {
+    char b[96];
+    std::snprintf(b, sizeof b, "%.9g %.9g %.9g", v[0], v[1], v[2]);
+    return std::string(b);
+  };
+  auto one = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.9g", v);
+    return std::string(b);
+  };
   xml << "<?xml version=\"1.0\"?>\n"
       << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
          "header_type=\"UInt64\">\n"
       << "  <UnstructuredGrid>\n"
+      << "    <FieldData>\n";
+  field("TimeValue", "Float64", 1, one(f.time_s));
+  field("projectile_position_m", "Float64", 3, vec(f.projectile_pos));
+  field("projectile_axis", "Float64", 3, vec(f.projectile_axis));
+  field("projectile_radius_m", "Float64", 1, one(f.projectile_radius_m));
+  field("projectile_length_m", "Float64", 1, one(f.projectile_length_m));
+  field("projectile_shape", "Int32", 1, std::to_string(f.projectile_shape) + "");
+  xml << "    </FieldData>\n"
       << "    <Piece NumberOfPoints=\"" << np * nc << "\" NumberOfCells=\"" << ne * nc << "\">\n"
       << "      <PointData Vectors=\"velocity\" Scalars=\"slip_rate\">\n";
   array(xml, app, "velocity", velocity, 3);
   array(xml, app, "slip_rate", slip);
+  array(xml, app, "duplicate", point_dup);
   xml << "      </PointData>\n      <CellData Scalars=\"strain_ratio\">\n";
   array(xml, app, "strain", strain);
   array(xml, app, "strain_ratio", ratio);
@@ -121,6 +171,7 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
   array(xml, app, "yarn_id", yarn);
   array(xml, app, "family", family);
   array(xml, app, "copy", copy);
+  array(xml, app, "duplicate", cell_dup);
   xml << "      </CellData>\n      <Points>\n";
   array(xml, app, "Points", points, 3);
   xml << "      </Points>\n      <Cells>\n";

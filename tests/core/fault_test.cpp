@@ -153,5 +153,48 @@ TEST(Fault, CompletedRunsWriteNullFaultFields) {
   EXPECT_TRUE(j["divergence_time_s"].is_null());
 }
 
+
+// The default scene at 260 m/s re-chooses tracked pairs in the folded, bunched yarns under
+// the projectile after the first breaks (116 times here, SPEC §4's search assumption was
+// reported as "lower solver.dt_factor" beside a suggestion to raise it). The yarns moved
+// less than half a node against each other in those steps (relative speeds 40-460 m/s
+// against L0 / dt = 14,300 m/s): they are counted as re-pairings, not as yarns outrunning
+// the search; a real outrun (the weft shifted 2.5 L0 in one step, above) still is.
+TEST(Fault, RepairingInAFoldedWeaveIsNotALostSearch) {
+  Simulation sim(test::scene_with({"solver.end_time_us=160"}));
+  sim.run();
+  const auto& d = sim.solver().diagnostics();
+  EXPECT_EQ(d.skipped_nodes, 0);
+  EXPECT_GT(d.repaired, 0);  // the folded weave under the projectile does re-pair
+  // Halving dt leaves the re-pairing: it is geometry, not speed.
+  Simulation fine(test::scene_with({"solver.end_time_us=160", "solver.dt_factor=0.25"}));
+  fine.run();
+  EXPECT_EQ(fine.solver().diagnostics().skipped_nodes, 0);
+  EXPECT_GT(fine.solver().diagnostics().repaired, 0);
+}
+
+// Slip is material: a crossing's slip rate never exceeds how fast its two yarns move
+// against each other, bounded by twice the fastest node plus the largest position shift a
+// compressed crossing makes per step (2 % of D, docs/MODEL.md §4). Before, re-paired or
+// kinked contacts showed up to 12 km/s where no node moved faster than 530 m/s.
+TEST(Fault, SlipRateIsBoundedByTheYarnsRelativeSpeed) {
+  Simulation sim(patch({"projectile.velocity_mps=400", "solver.end_time_us=40"}));
+  const Model& m = sim.solver().model();
+  const double shift_rate = 2 * 0.02 * 0.5 * sim.scene().fabric.thickness_m / m.dt;
+  double worst = 0, any = 0;
+  while (!sim.finished()) {
+    sim.step();
+    double vmax = 0;
+    for (int i = 0; i < m.node_count; ++i) vmax = std::max(vmax, sim.solver().velocity(i).norm());
+    for (int c = 0; c < int(m.crossings.size()); ++c) {
+      const double s = sim.solver().crossing_slip_rate(c);
+      any = std::max(any, s);
+      worst = std::max(worst, s / (2 * vmax + shift_rate));
+    }
+  }
+  EXPECT_GT(any, 1.0);  // yarns do slip in this run
+  EXPECT_LE(worst, 1.0);
+}
+
 }  // namespace
 }  // namespace ravel

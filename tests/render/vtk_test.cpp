@@ -49,8 +49,9 @@ TEST(Vtk, SeriesWritesVtuPerFrameAndAPvdIndex) {
   // Appended raw data: each array = 8-byte length + payload. Points: 4 * nodes * 3 floats.
   const std::size_t np = 4 * f.node_pos.size(), nc = 4 * f.elem_a.size();
   const std::size_t payload = (np * 3 * 4 + 8) * 2 + (np * 4 + 8)            // points, velocity, slip
+                              + (np + 8)                                     // point duplicate
                               + 3 * (nc * 4 + 8)                             // strain, ratio, stress
-                              + 3 * (nc + 8) + (nc * 4 + 8)                  // broken, family, copy, yarn
+                              + 4 * (nc + 8) + (nc * 4 + 8)                  // broken, family, copy, duplicate, yarn
                               + (2 * nc * 8 + 8) + (nc * 8 + 8) + (nc + 8);  // cells
   const std::size_t start = vtu.find('_', vtu.find("<AppendedData")) + 1;
   const std::size_t end = vtu.rfind("\n  </AppendedData>");
