@@ -160,21 +160,38 @@ int cmd_run(const Args& args) {
     bool rec_ok = recorder->on_sample(sim, &rec_error);  // the initial state
 #endif
     inject_test_fault(sim);
-    const bool progress = scene.output.progress && !has_switch(a, "quiet") && isatty(fileno(stderr));
-    auto last = std::chrono::steady_clock::now();
+    // Progress: on a terminal a line that rewrites itself 5 times a second; without one
+    // (a log, CI) a line every 5 s. Percent and time left of the end time; an auto end
+    // runs until perforation, rebound or caught, so it shows the cap it will not pass.
+    const bool wanted = scene.output.progress && !has_switch(a, "quiet");
+    const bool tty = isatty(fileno(stderr));
+    const bool progress = wanted && tty;
+    const auto started = std::chrono::steady_clock::now();
+    auto last = started;
+    const double end_s = scene.solver.end_time_s;
     sim.run(&g_interrupt, [&](const Simulation& s) {
 #ifdef RAVEL_HAVE_SNAPSHOT
       if (rec_ok) rec_ok = recorder->on_sample(s, &rec_error);
 #endif
-      if (!progress) return;
+      if (!wanted) return;
       auto now = std::chrono::steady_clock::now();
-      if (now - last < std::chrono::milliseconds(200)) return;
+      if (now - last < std::chrono::milliseconds(tty ? 200 : 5000)) return;
       last = now;
       const auto& r = s.history().back();
-      std::fprintf(stderr, "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  balance %+.1e   ", r.t_s * 1e6,
-                   r.projectile_velocity_mps, r.broken_warp, r.broken_weft, r.balance_error);
+      const double wall = std::chrono::duration<double>(now - started).count();
+      const double frac = end_s > 0 ? std::min(1.0, r.t_s / end_s) : 0.0;
+      char when[96];
+      if (scene.solver.end_time_auto)
+        std::snprintf(when, sizeof when, "%.0f us/s simulated, until it decides (at most %.0f us)",
+                      wall > 0 ? r.t_s * 1e6 / wall : 0.0, end_s * 1e6);
+      else
+        std::snprintf(when, sizeof when, "%3.0f %%, about %.0f s left", 100 * frac,
+                      frac > 0 ? wall * (1 - frac) / frac : 0.0);
+      std::fprintf(stderr, tty ? "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  %s   " :
+                                 "ravel: t = %.2f us, v = %.2f m/s, broken %d/%d, %s\n",
+                   r.t_s * 1e6, r.projectile_velocity_mps, r.broken_warp, r.broken_weft, when);
     });
-    if (progress) std::fprintf(stderr, "\r%*s\r", 80, "");
+    if (progress) std::fprintf(stderr, "\r%*s\r", 110, "");
     write_run_outputs(a.out_dir, sim);
 #ifdef RAVEL_HAVE_SNAPSHOT
     if (rec_ok) rec_ok = recorder->finish(sim, &rec_error);
