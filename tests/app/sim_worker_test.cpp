@@ -210,7 +210,9 @@ TEST(SimWorker, ABadSceneKeepsTheCurrentRunAndSaysWhy) {
   WorkerView v;
   w.sync(v);
   EXPECT_EQ(v.run_id, 1);
-  EXPECT_FALSE(v.message.empty());
+  // The message names the key and the problem, as the command line's does.
+  EXPECT_NE(v.message.find("fabric.width_mm"), std::string::npos) << v.message;
+  EXPECT_NE(v.message.find("must be positive"), std::string::npos) << v.message;
 }
 
 TEST(SimWorker, ExitWhileRunningJoinsPromptly) {

@@ -30,6 +30,18 @@ for k in perforated residual_velocity_mps energy_absorbed_J perforation_time_s e
          node_count step_count dt_s wall_time_s status friction_work_J warnings; do
   check "summary has $k" grep -q "\"$k\"" "$tmp/ok/summary.json"
 done
+# ... and their values: the 400 m/s strike perforates the 24 mm patch (1 g at 400 m/s is
+# 80 J; such a patch absorbs a few J), the absorbed energy is M (V0^2 - Vr^2) / 2 as
+# documented, and the ledger balances within the method's 1 %.
+check "400 m/s perforates" bash -c "/usr/bin/python3 - '$tmp/ok/summary.json' <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s['status'] == 'completed' and s['perforated'] is True, s['status']
+vr = s['residual_velocity_mps']
+assert 300 < vr < 400, vr
+assert abs(s['energy_absorbed_J'] - 0.5e-3 * (400**2 - vr**2)) < 1e-9 * 80, s['energy_absorbed_J']
+assert abs(s['energy_balance_error']) < 0.01, s['energy_balance_error']
+PY"
 check "history starts with t_s" bash -c "head -1 '$tmp/ok/history.csv' | grep -q '^t_s,'"
 for c in projectile_velocity_mps friction_work_J broken_warp broken_weft max_strain sliding_crossings stuck_crossings; do
   check "history has $c" bash -c "head -1 '$tmp/ok/history.csv' | grep -q '$c'"

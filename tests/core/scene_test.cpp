@@ -118,5 +118,47 @@ TEST(Scene, QuestionableButAllowedSettingsWarn) {
   EXPECT_HAS(s.warnings[0], "solver.dt_factor");
 }
 
+// The fuzz corpus's seeds with the outcome each is there for: the replay only checks
+// invariants (no crash, a message), so a seed that should be refused is checked here.
+TEST(SceneCorpus, SeedsHaveTheirExpectedOutcome) {
+  const std::string dir = RAVEL_FUZZ_CORPUS;
+  const std::pair<const char*, const char*> refused[] = {
+      {"typo_key.toml", "did you mean 'projectile.velocity_mps'"},
+      {"syntax_error.toml", "TOML syntax error"},
+      {"unknown_section.toml", "unknown section"},
+      {"spacing_in_metres.toml", "looks like a value in m"},
+      {"nan_inf.toml", "is infinite"},
+      {"array_of_tables.toml", "fabric: unknown key"}};
+  for (const auto& [file, why] : refused) {
+    try {
+      load_scene(dir + "/" + file);
+      ADD_FAILURE() << file << " was accepted";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << file << ": " << e.what();
+    }
+  }
+  for (const char* file : {"default_scene.toml", "small_patch.toml", "single_yarn.toml", "oblique_cone.toml",
+                           "inline_tables.toml", "name_escapes.toml", "clamped_list.toml"})
+    EXPECT_NO_THROW(load_scene(dir + "/" + file)) << file;
+}
+
+// Not a scene: a folder, an empty file, only comments, /dev/null are refused (they would
+// otherwise run the built-in defaults).
+TEST(SceneCorpus, NonScenesAreRefused) {
+  const std::string tmp = ::testing::TempDir();
+  std::ofstream(tmp + "/ravel_empty.toml").close();
+  std::ofstream(tmp + "/ravel_comments.toml") << "# nothing\n\n   # here\n";
+  for (const std::string& path : {tmp, tmp + "/ravel_empty.toml", tmp + "/ravel_comments.toml", std::string("/dev/null")}) {
+    try {
+      load_scene(path);
+      ADD_FAILURE() << path << " was accepted";
+    } catch (const SceneError& e) {
+      const std::string m = e.what();
+      EXPECT_TRUE(m.find("holds no scene keys") != std::string::npos || m.find("is a folder") != std::string::npos)
+          << path << ": " << m;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ravel

@@ -65,5 +65,20 @@ done
 for f in residual_velocity.png residual_velocity.svg residual_velocity.csv; do
   [[ -s $WORK/limit/$f ]] || fail "limit: $f missing"
 done
+# ... and its values: a limit inside its bracket, the bracket within the tolerance, and
+# every run on the right side of it (perforated above, stopped below).
+/usr/bin/python3 - "$WORK/limit/limit.json" <<'PY' || fail "limit.json values"
+import json, sys
+j = json.load(open(sys.argv[1]))
+bl, (lo, hi) = j["ballistic_limit_mps"], j["bracket_mps"]
+assert isinstance(bl, float) and lo <= bl <= hi, (bl, lo, hi)
+assert 0 < hi - lo <= 2.0, (lo, hi)
+for r in j["runs"]:
+    if r["failed"] or not r["decided"]:
+        continue
+    v = r["velocity_mps"]
+    assert (v >= hi) if r["perforated"] else (v <= lo), r
+    assert (r["residual_velocity_mps"] > 0) == r["perforated"], r
+PY
 
 if [[ $fails == 0 ]]; then echo "studies CLI: all passed"; else echo "studies CLI: $fails failed"; exit 1; fi
