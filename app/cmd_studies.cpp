@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <nlohmann/json.hpp>
 
 #include "chart.h"
 #include "cli.h"
@@ -32,6 +33,12 @@ std::atomic<bool>& interrupt_flag();
 void install_signal_handlers();
 
 namespace {
+
+std::string fmt1(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.1f", v);
+  return b;
+}
 
 double parse_positive(const CommonArgs& a, const std::string& flag, double fallback) {
   auto it = a.flags.find(flag);
@@ -98,14 +105,37 @@ int cmd_sweep(const Args& args) {
     std::fflush(stdout);
     install_signal_handlers();
     studies::SweepHooks hooks;
+    if (verbose && mine.size() > 1000)
+      std::printf("  a large sweep: %zu cases; the time left is shown after each case (Ctrl-C keeps what "
+                  "finished, a rerun resumes)\n",
+                  mine.size());
+    // Each case as it ends: k of N, its outcome, and the time left at the rate so far.
+    const auto sweep_t0 = std::chrono::steady_clock::now();
+    int ended = 0, ran = 0;
     hooks.on_case = [&](const studies::CaseResult& r) {
-      if (!verbose) return;
+      ++ended;
       if (r.skipped) return;
+      ++ran;
+      if (!verbose) return;
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_t0).count();
+      const double left = ran > 0 ? wall / ran * double(int(mine.size()) - ended) : 0.0;
       if (!r.ok) {
-        std::fprintf(stderr, "  failed: %s: %s\n", r.c.name().c_str(), r.error.c_str());
+        std::fprintf(stderr, "  [%d/%zu] failed: %s: %s\n", ended, mine.size(), r.c.name().c_str(), r.error.c_str());
         return;
       }
-      std::printf("  done: %s\n", r.c.name().c_str());
+      std::string outcome = "?";
+      const auto j = nlohmann::json::parse(r.summary_json_text, nullptr, false);
+      if (!j.is_discarded() && j.is_object()) {
+        const std::string status = j.value("status", "");
+        if (status == "diverged")
+          outcome = "DIVERGED: " + j.value("diagnosis", std::string());
+        else if (j.contains("perforated") && j["perforated"].is_boolean() && j["perforated"].get<bool>())
+          outcome = "perforated, residual " + fmt1(j["residual_velocity_mps"].get<double>()) + " m/s";
+        else
+          outcome = j.value("end_reason", std::string("stopped"));
+      }
+      std::printf("  [%d/%zu] %s: %s%s\n", ended, mine.size(), r.c.name().c_str(), outcome.c_str(),
+                  ended < int(mine.size()) ? ("  (about " + fmt1(left) + " s left)").c_str() : "");
       std::fflush(stdout);
     };
     hooks.on_progress = [&](const studies::SweepProgress& p) {

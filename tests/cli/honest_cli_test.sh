@@ -149,5 +149,11 @@ out=$("$ravel" limit "$tmp/pt.toml" --out "$tmp/lim" 2>&1)
 grep -q '"interrupted": false' "$tmp/lim/limit.json" && grep -q '"converged": true' "$tmp/lim/limit.json" && ok ||
   bad "resumed limit did not finish"
 
+# --- A sweep says k of N and each case's outcome; a diverged case is not "done".
+out=$("$ravel" sweep "${small[@]/--quiet/}" --set solver.end_time_us=20 --vary solver.dt_factor=0.5,2 --jobs 1 --out "$tmp/swd" 2>&1)
+grep -qE '^  \[1/2\] solver.dt_factor=0.5: ' <<<"$out" && ok || bad "sweep progress line: $out"
+grep -qE '^  \[2/2\] solver.dt_factor=2: DIVERGED: ' <<<"$out" && ok || bad "a diverged case is not reported as such: $out"
+grep -q "done:" <<<"$out" && bad "sweep still prints done: $out" || ok
+
 echo "honest cli: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]
