@@ -161,16 +161,13 @@ TEST(Fault, CompletedRunsWriteNullFaultFields) {
 // against L0 / dt = 14,300 m/s): they are counted as re-pairings, not as yarns outrunning
 // the search; a real outrun (the weft shifted 2.5 L0 in one step, above) still is.
 TEST(Fault, RepairingInAFoldedWeaveIsNotALostSearch) {
-  Simulation sim(test::scene_with({"solver.end_time_us=160"}));
+  // To 125 us: the first re-pairings come at 118 us. (At dt_factor 0.25 they remain, 34 by
+  // perforation, first at 114 us: measured, docs/MODEL.md §4; too slow for this suite.)
+  Simulation sim(test::scene_with({"solver.end_time_us=125", "solver.threads=1"}));
   sim.run();
   const auto& d = sim.solver().diagnostics();
   EXPECT_EQ(d.skipped_nodes, 0);
   EXPECT_GT(d.repaired, 0);  // the folded weave under the projectile does re-pair
-  // Halving dt leaves the re-pairing: it is geometry, not speed.
-  Simulation fine(test::scene_with({"solver.end_time_us=160", "solver.dt_factor=0.25"}));
-  fine.run();
-  EXPECT_EQ(fine.solver().diagnostics().skipped_nodes, 0);
-  EXPECT_GT(fine.solver().diagnostics().repaired, 0);
 }
 
 // Slip is material: a crossing's slip rate never exceeds how fast its two yarns move
