@@ -107,10 +107,19 @@ TEST(Memory, StudyInTheBackgroundWhileEditing) {
     opt.out_dir = (root / ("sweep" + std::to_string(round))).string();
     opt.jobs = 1;
     std::string error;
+    // Under a sanitizer (10-45x slower, with the worker competing for the cores) a quarter
+    // of the cases: a round of 40 took over 120 s on the CI machine. The deadline only
+    // guards against a hang.
+#ifdef RAVEL_UNDER_SANITIZER
+    const int cases = 10;
+    ASSERT_TRUE(runner.start(opt, {"projectile.velocity_mps=100:280:20"}, &error)) << error;
+#else
+    const int cases = 40;
     ASSERT_TRUE(runner.start(opt, {"projectile.velocity_mps=100:295:5"}, &error)) << error;
+#endif
     int edits = 0;
     app::WorkerView v;
-    const auto deadline = std::chrono::steady_clock::now() + 120s;
+    const auto deadline = std::chrono::steady_clock::now() + 130s;
     while (runner.running() && std::chrono::steady_clock::now() < deadline) {
       switch (edits++ % 4) {
         case 0:
@@ -133,9 +142,9 @@ TEST(Memory, StudyInTheBackgroundWhileEditing) {
     }
     const auto snap = runner.snapshot();
     ASSERT_TRUE(snap.finished) << snap.error;
-    EXPECT_EQ(snap.progress.done, 40);
+    EXPECT_EQ(snap.progress.done, cases);
     EXPECT_EQ(snap.progress.failed, 0);
-    EXPECT_EQ(snap.results.rows.size(), 40u);
+    EXPECT_EQ(snap.results.rows.size(), size_t(cases));
     w.pause();
     ASSERT_TRUE(w.wait_idle(20s));
     rss_after[round] = rss_mb();
