@@ -34,7 +34,8 @@ CommonArgs parse_args(const std::vector<std::string>& args, const std::string& c
         has_value = true;
       }
       const CommandOption* o = option(name);
-      if (!o) throw UsageError("unknown option --" + name + " for ravel " + command + " (see 'ravel help " + command + "')");
+      if (!o)
+        throw UsageError("unknown option --" + name + " for ravel " + command + " (see 'ravel help " + command + "')");
       if (!o->value) {
         if (has_value) throw UsageError("--" + name + " takes no value");
         a.switches.push_back(name);
@@ -80,7 +81,8 @@ std::string scene_path_from(const CommonArgs& a) {
     if (!std::filesystem::is_regular_file(inside, ec))
       throw SceneError("", path, "is a folder without a scene.toml; give a scene file or a run's output folder");
     static bool said = false;  // once per command, however often the path is resolved
-    if (!said) std::fprintf(stderr, "ravel: %s is a folder: using the scene it holds, %s\n", path.c_str(), inside.c_str());
+    if (!said)
+      std::fprintf(stderr, "ravel: %s is a folder: using the scene it holds, %s\n", path.c_str(), inside.c_str());
     said = true;
     return inside;
   }
@@ -128,7 +130,8 @@ int report_error(const std::exception& e) {
   }
   if (dynamic_cast<const UsageError*>(&e)) {
     const std::string m = e.what();
-    std::fprintf(stderr, "ravel: %s%s\n", m.c_str(), m.find("'ravel help") == std::string::npos ? " (see 'ravel help')" : "");
+    std::fprintf(stderr, "ravel: %s%s\n", m.c_str(),
+                 m.find("'ravel help") == std::string::npos ? " (see 'ravel help')" : "");
     return exit_usage;
   }
   if (dynamic_cast<const OutputError*>(&e)) {

@@ -187,8 +187,9 @@ int cmd_run(const Args& args) {
       else
         std::snprintf(when, sizeof when, "%3.0f %%, about %.0f s left", 100 * frac,
                       frac > 0 ? wall * (1 - frac) / frac : 0.0);
-      std::fprintf(stderr, tty ? "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  %s   " :
-                                 "ravel: t = %.2f us, v = %.2f m/s, broken %d/%d, %s\n",
+      std::fprintf(stderr,
+                   tty ? "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  %s   "
+                       : "ravel: t = %.2f us, v = %.2f m/s, broken %d/%d, %s\n",
                    r.t_s * 1e6, r.projectile_velocity_mps, r.broken_warp, r.broken_weft, when);
     });
     if (progress) std::fprintf(stderr, "\r%*s\r", 110, "");

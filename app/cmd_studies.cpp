@@ -106,9 +106,10 @@ int cmd_sweep(const Args& args) {
     install_signal_handlers();
     studies::SweepHooks hooks;
     if (verbose && mine.size() > 1000)
-      std::printf("  a large sweep: %zu cases; the time left is shown after each case (Ctrl-C keeps what "
-                  "finished, a rerun resumes)\n",
-                  mine.size());
+      std::printf(
+          "  a large sweep: %zu cases; the time left is shown after each case (Ctrl-C keeps what "
+          "finished, a rerun resumes)\n",
+          mine.size());
     // Each case as it ends: k of N, its outcome, and the time left at the rate so far.
     const auto sweep_t0 = std::chrono::steady_clock::now();
     int ended = 0, ran = 0;
@@ -261,7 +262,8 @@ int cmd_limit(const Args& args) {
     std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
                 r.ballistic_limit_mps, r.lo_mps, r.hi_mps, r.runs.size(), r.wall_time_s,
                 r.wall_time_s > 0 ? r.runs.size() / (r.wall_time_s / 3600) : 0.0);
-    if (resumed) std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
+    if (resumed)
+      std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
     if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
     if (r.fit.ok)
       std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,

@@ -47,8 +47,7 @@ void progress_line(bool verbose, const std::string& s) {
 
 int cmd_tradeoff(const Args& args) {
   try {
-    CommonArgs a =
-        parse_args(args, "tradeoff");
+    CommonArgs a = parse_args(args, "tradeoff");
     if (a.out_dir.empty()) throw UsageError("tradeoff needs --out DIR");
     studies::TradeoffOptions opt;
     opt.scene_path = scene_path_from(a);

@@ -12,16 +12,21 @@ namespace ravel::app {
 namespace {
 
 // Options most commands share.
-const CommandOption kSet{"set", "KEY=VALUE", true, "override a scene key (repeatable; see ravel keys), e.g. --set yarn.friction=0.1"};
+const CommandOption kSet{"set", "KEY=VALUE", true,
+                         "override a scene key (repeatable; see ravel keys), e.g. --set yarn.friction=0.1"};
 const CommandOption kOut{"out", "DIR", false, "the output folder (created; outputs are written atomically)"};
-const CommandOption kThreads{"threads", "N", false, "solver threads per run (default: the scene's solver.threads, 0 = one per core)"};
+const CommandOption kThreads{"threads", "N", false,
+                             "solver threads per run (default: the scene's solver.threads, 0 = one per core)"};
 const CommandOption kQuiet{"quiet", nullptr, false, "no progress lines"};
 const CommandOption kJobs{"jobs", "N", false, "runs at a time (default: one per core)"};
 
 std::vector<Command> make_table() {
   std::vector<Command> t;
-  t.push_back({"gui", "ravel [gui] [SCENE] [options]", "the interactive app (the default command when a display exists)",
-               {kSet, kThreads,
+  t.push_back({"gui",
+               "ravel [gui] [SCENE] [options]",
+               "the interactive app (the default command when a display exists)",
+               {kSet,
+                kThreads,
                 {"size", "WxH", false, "window size (default: 1600x1000, at least 640x480)"},
                 {"view", "NAME", false, "initial camera: oblique (default), top, back or section"},
                 {"field", "NAME", false, "initial colour field: strain (default), velocity or sliding"},
@@ -34,17 +39,24 @@ std::vector<Command> make_table() {
                  "slow:US_PER_S, set:KEY=VALUE, view:NAME, field:NAME, screenshot:FILE, export-results, "
                  "export-scene, demo:NAME, continue, compare-exit"},
                 {"export-dir", "DIR", false, "the Export panel's folder (default: ./ravel_export)"}}});
-  t.push_back({"run", "ravel run [SCENE] [--set KEY=VALUE ...] --out DIR [options]",
+  t.push_back({"run",
+               "ravel run [SCENE] [--set KEY=VALUE ...] --out DIR [options]",
                "one headless run: DIR/summary.json, DIR/history.csv, DIR/scene.toml",
-               {kSet, kOut, kThreads,
-                {"frames", "every=N|final|none", false, "PNG frames into DIR/frames/ every N steps, the last one only, or none (default)"},
+               {kSet,
+                kOut,
+                kThreads,
+                {"frames", "every=N|final|none", false,
+                 "PNG frames into DIR/frames/ every N steps, the last one only, or none (default)"},
                 {"vtk", nullptr, false, "a VTU series DIR/vtk/frame.pvd at the --frames times (default every=100)"},
                 {"view", "NAME", false, "camera of the PNG frames: oblique (default), top, back or section"},
                 {"field", "NAME", false, "colour of the PNG frames: strain (default), velocity or sliding"},
                 kQuiet}});
-  t.push_back({"snapshot", "ravel snapshot [SCENE] [--set ...] --at T_US[,T_US...] --out DIR [options]",
+  t.push_back({"snapshot",
+               "ravel snapshot [SCENE] [--set ...] --at T_US[,T_US...] --out DIR [options]",
                "PNG images of the fabric at given times",
-               {kSet, kOut, kThreads,
+               {kSet,
+                kOut,
+                kThreads,
                 {"at", "T_US[,T_US...]", false, "simulated times in us (required)"},
                 {"view", "NAME", false, "oblique (default), top, back or section"},
                 {"field", "NAME", false, "strain (default), velocity or sliding"},
@@ -52,34 +64,57 @@ std::vector<Command> make_table() {
                 {"size", "WxH", false, "image size (default 1600x1200)"},
                 kQuiet}});
   t.push_back({"keys", "ravel keys", "every scene key with its unit, built-in default, allowed range and meaning", {}});
-  t.push_back({"sweep", "ravel sweep [SCENE] --vary KEY=START:STOP:STEP|V1,V2,... [--vary ...] --out DIR [options]",
-               "a parameter sweep: one run per case, DIR/results.csv and charts; rerun to resume",
-               {kSet, kOut, kThreads, kJobs,
-                {"vary", "KEY=START:STOP:STEP|V1,V2,...", true, "a key and its values (repeatable: the cases are the product)"},
-                {"shard", "i/n", false, "only the cases k with k mod n = i - 1 (to split a sweep over machines)"},
-                {"no-extend", nullptr, false, "a run that reaches its end time undecided is not extended to solver.max_end_time_us"},
-                {"restart", nullptr, false, "start over in a folder that holds another sweep's cases (they are removed)"},
-                kQuiet}});
-  t.push_back({"limit", "ravel limit [SCENE] [--set ...] --out DIR [options]",
+  t.push_back(
+      {"sweep",
+       "ravel sweep [SCENE] --vary KEY=START:STOP:STEP|V1,V2,... [--vary ...] --out DIR [options]",
+       "a parameter sweep: one run per case, DIR/results.csv and charts; rerun to resume",
+       {kSet,
+        kOut,
+        kThreads,
+        kJobs,
+        {"vary", "KEY=START:STOP:STEP|V1,V2,...", true, "a key and its values (repeatable: the cases are the product)"},
+        {"shard", "i/n", false, "only the cases k with k mod n = i - 1 (to split a sweep over machines)"},
+        {"no-extend", nullptr, false,
+         "a run that reaches its end time undecided is not extended to solver.max_end_time_us"},
+        {"restart", nullptr, false, "start over in a folder that holds another sweep's cases (they are removed)"},
+        kQuiet}});
+  t.push_back({"limit",
+               "ravel limit [SCENE] [--set ...] --out DIR [options]",
                "the ballistic limit by bracketing and bisection, with a Lambert-Jonas fit; rerun to resume",
-               {kSet, kOut, kThreads,
+               {kSet,
+                kOut,
+                kThreads,
                 {"tolerance", "MPS", false, "stop when the bracket is this narrow (default 1 m/s)"},
                 {"start", "MPS", false, "the first velocity tried (default 100 m/s)"},
                 {"max-runs", "N", false, "give up after N runs (default 60)"},
                 {"no-fit", nullptr, false, "no extra runs for the Lambert-Jonas fit"},
                 kQuiet}});
-  t.push_back({"paper", "ravel paper --out DIR [options]",
+  t.push_back({"paper",
+               "ravel paper --out DIR [options]",
                "the paper's studies reproduced on the full mesh: DIR/report.md with verdicts; rerun to resume",
-               {kSet, kOut, kThreads, kJobs, {"quick", nullptr, false, "a small mesh and few cases (minutes, for a check)"}, kQuiet}});
-  t.push_back({"demo", "ravel demo --list | NAME|all --out DIR [options]", "guided demos as captioned PNGs and charts",
-               {kSet, kOut, kThreads,
+               {kSet,
+                kOut,
+                kThreads,
+                kJobs,
+                {"quick", nullptr, false, "a small mesh and few cases (minutes, for a check)"},
+                kQuiet}});
+  t.push_back({"demo",
+               "ravel demo --list | NAME|all --out DIR [options]",
+               "guided demos as captioned PNGs and charts",
+               {kSet,
+                kOut,
+                kThreads,
                 {"list", nullptr, false, "list the demos"},
                 {"quick", nullptr, false, "smaller, faster versions"},
                 {"size", "WxH", false, "image size (default 1600x1000, at least 320x240)"},
                 kQuiet}});
-  t.push_back({"tradeoff", "ravel tradeoff [SCENE] [--set ...] --out DIR [options]",
+  t.push_back({"tradeoff",
+               "ravel tradeoff [SCENE] [--set ...] --out DIR [options]",
                "error against cost of every speed/accuracy knob (docs/tradeoff.md)",
-               {kSet, kOut, kThreads, kJobs,
+               {kSet,
+                kOut,
+                kThreads,
+                kJobs,
                 {"quick", nullptr, false, "fewer values per knob"},
                 {"knob", "KEY=V1,V2,...", true, "replace one knob's values (repeatable)"},
                 {"only", "KEY[,KEY...]", false, "only these knobs"},
@@ -91,9 +126,13 @@ std::vector<Command> make_table() {
                 {"note", "TEXT", false, "a note recorded with the results"},
                 {"date", "YYYY-MM-DD", false, "the date recorded (default today)"},
                 kQuiet}});
-  t.push_back({"stability", "ravel stability [SCENE] [--set ...] --out DIR [options]",
+  t.push_back({"stability",
+               "ravel stability [SCENE] [--set ...] --out DIR [options]",
                "maps of where the methods fail (stable / warned / diverged)",
-               {kSet, kOut, kThreads, kJobs,
+               {kSet,
+                kOut,
+                kThreads,
+                kJobs,
                 {"quick", nullptr, false, "coarser maps"},
                 {"map", "NAME", true, "only this map: dt_factor, friction or velocity (repeatable)"},
                 kQuiet}});

@@ -24,8 +24,8 @@ struct Command {
 const std::vector<Command>& command_table();
 const Command* find_command(const std::string& name);  // nullptr when there is none
 
-void print_usage();                        // `ravel help`
+void print_usage();                         // `ravel help`
 void print_command_help(const Command& c);  // `ravel help COMMAND`, `ravel COMMAND --help`
-void print_version();                      // `ravel --version`
+void print_version();                       // `ravel --version`
 
 }  // namespace ravel::app

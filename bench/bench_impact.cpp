@@ -38,8 +38,8 @@ int main(int argc, char** argv) {
     const char* spin = std::getenv("GOMP_SPINCOUNT");
     std::printf("%s,%s,%s,%d,%d,%ld,%.2f,%.4f,%.4g,%.2f,%d,%.2f,%s,%s\n", s.model.c_str(), s.contact_model.c_str(),
                 scene.solver.precision == ravel::Precision::double_precision ? "double" : "float", scene.solver.threads,
-                s.modelled_node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9, int(s.perforated),
-                s.residual_velocity_mps, spin ? spin : "default",
+                s.modelled_node_count, s.step_count, s.end_time_s * 1e6, wall, ns / wall, wall / ns * 1e9,
+                int(s.perforated), s.residual_velocity_mps, spin ? spin : "default",
                 sim.solver().simd_active() ? ravel::lanes::isa_name(ravel::lanes::isa()) : "off");
   }
   return 0;

@@ -35,8 +35,8 @@ struct Frame {
   // what makes yarn ids unique across the mirrored copies (write_vtu).
   std::vector<std::int32_t> yarn_grid;
   std::vector<std::uint8_t> yarn_family;
-  std::vector<float> elem_strain;             // engineering strain
-  std::vector<float> elem_stress_pa;          // axial stress
+  std::vector<float> elem_strain;     // engineering strain
+  std::vector<float> elem_stress_pa;  // axial stress
   float failure_strain = 0.052f;
   float yarn_diameter_m = 0.2e-3f;  // drawn tube diameter (contact diameter D)
 
