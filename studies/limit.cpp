@@ -267,6 +267,8 @@ nlohmann::ordered_json shot_to_json(const Shot& s) {
   return q;
 }
 
+}  // namespace
+
 Shot shot_from_json(const nlohmann::json& q) {
   Shot s;
   auto num = [&](const char* k, double d) { return q.contains(k) && q[k].is_number() ? q[k].get<double>() : d; };
@@ -285,8 +287,6 @@ Shot shot_from_json(const nlohmann::json& q) {
   s.wall_time_s = num("wall_time_s", 0);
   return s;
 }
-
-}  // namespace
 
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
                       const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run,

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "simulation.h"
 
 namespace ravel::studies {
@@ -26,9 +28,9 @@ struct Shot {
   bool decided = true;     // false: reached end_time neither perforated nor turned back
   double wall_time_s = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
-  std::string purpose;  // bracket | bisect | fit
-  bool failed = false;  // the run diverged: its outcome means nothing
-  std::string error;    // why
+  std::string purpose;   // bracket | bisect | fit
+  bool failed = false;   // the run diverged: its outcome means nothing
+  std::string error;     // why
   bool resumed = false;  // read back from a kept run, not run now
 };
 
@@ -81,6 +83,9 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
                       const std::atomic<bool>* interrupt = nullptr, std::function<void(const Simulation&)> on_run = {},
                       const std::string& cache_dir = "");
+
+// One run of limit.json's "runs" (or of a kept DIR/runs/ file) read back.
+Shot shot_from_json(const nlohmann::json& q);
 
 // limit.json: the result, the fit, every run, and what was run.
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,

@@ -82,22 +82,7 @@ LimitResult limit_from_json(const std::string& text) {
   r.fit.rms_mps = f.value("rms_mps", 0.0);
   r.fit.points = f.value("points", 0);
   r.fit.note = f.value("note", "");
-  for (const auto& q : j["runs"]) {
-    Shot s;
-    s.velocity_mps = q.value("velocity_mps", 0.0);
-    s.purpose = q.value("purpose", "");
-    s.perforated = q.value("perforated", false);
-    s.residual_velocity_mps = q.value("residual_velocity_mps", 0.0);
-    s.energy_absorbed_J = q.value("energy_absorbed_J", 0.0);
-    s.end_reason = q.value("end_reason", "");
-    s.decided = q.value("decided", true);
-    s.failed = q.value("failed", false);
-    s.error = q.value("error", "");
-    s.broken_warp_yarns = q.value("broken_warp_yarns", 0);
-    s.broken_weft_yarns = q.value("broken_weft_yarns", 0);
-    s.wall_time_s = q.value("wall_time_s", 0.0);
-    r.runs.push_back(s);
-  }
+  for (const auto& q : j["runs"]) r.runs.push_back(shot_from_json(q));
   for (const auto& w : j["warnings"]) r.warnings.push_back(w.get<std::string>());
   r.wall_time_s = j.value("wall_time_s", 0.0);
   return r;
@@ -325,11 +310,14 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
           if (fs::exists(e.dir + "/limit.json")) {
             e.result = limit_from_json(read_text_file(e.dir + "/limit.json"));
           } else {
-            ShootFn shoot = scene_shooter(opt.scene_path, ov, interrupt, [&e](const Simulation& sim) {
-              if (!e.keep_frame || !sim.summary().perforated) return;
-              const double v = sim.scene().projectile.velocity_mps;
-              if (v < e.frame_v) e.frame_v = v, e.frame = sim.frame();
-            }, e.dir);
+            ShootFn shoot = scene_shooter(
+                opt.scene_path, ov, interrupt,
+                [&e](const Simulation& sim) {
+                  if (!e.keep_frame || !sim.summary().perforated) return;
+                  const double v = sim.scene().projectile.velocity_mps;
+                  if (v < e.frame_v) e.frame_v = v, e.frame = sim.frame();
+                },
+                e.dir);
             e.result = find_ballistic_limit(shoot, lo, false);
             std::lock_guard<std::mutex> lock(mu);
             limit_runs += int(e.result.runs.size());
