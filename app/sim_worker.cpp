@@ -71,6 +71,7 @@ void SimWorker::play() {
 
 void SimWorker::pause() {
   paused_.store(true);
+  pause_serial_.fetch_add(1);
   notify();
 }
 
@@ -83,6 +84,7 @@ void SimWorker::toggle_pause() {
 
 void SimWorker::step_once(int steps) {
   paused_.store(true);
+  pause_serial_.fetch_add(1);
   steps_requested_.fetch_add(std::max(1, steps));
   notify();
 }
@@ -93,11 +95,10 @@ void SimWorker::reset() {
 }
 
 void SimWorker::restart(const Scene& scene) {
-  paused_.store(false);  // a restart is to watch the new values play out
-  steps_requested_.store(0);
   {
     std::lock_guard<std::mutex> lk(mutex_);
     pending_.scene = scene;
+    pending_.restart_pause_serial = pause_serial_.load();
     has_pending_.store(true);
   }
   notify();
@@ -229,7 +230,7 @@ void SimWorker::retire_current_run() {
   ++shared_.past_serial;
 }
 
-void SimWorker::rebuild(const Scene& edited) {
+bool SimWorker::rebuild(const Scene& edited) {
   std::unique_ptr<Simulation> fresh;
   Scene scene = edited;
   try {
@@ -238,7 +239,7 @@ void SimWorker::rebuild(const Scene& edited) {
     fresh = std::make_unique<Simulation>(scene);
   } catch (const std::exception& e) {
     message_ = std::string("could not build the scene: ") + e.what();
-    return;
+    return false;
   }
   retire_current_run();
   sim_ = std::move(fresh);
@@ -253,6 +254,7 @@ void SimWorker::rebuild(const Scene& edited) {
   rate_wall_ = anchor_wall_;
   rate_steps_ = 0;
   rate_sim_s_ = 0;
+  return true;
 }
 
 bool SimWorker::apply_commands() {
@@ -284,7 +286,12 @@ bool SimWorker::apply_commands() {
     }
     if (p.scene) {
       reset_.store(false);  // a restart is a reset with new values
-      rebuild(*p.scene);
+      // A restart is to watch the new values play out (unless paused since); a refused one
+      // keeps the current run as it was, paused or not.
+      if (rebuild(*p.scene) && pause_serial_.load() == p.restart_pause_serial) {
+        steps_requested_.store(0);
+        paused_.store(false);
+      }
     }
     changed = true;
   }

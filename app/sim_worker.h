@@ -91,7 +91,7 @@ class SimWorker {
   void toggle_pause();
   void step_once(int steps = 1);     // while paused: advance this many steps
   void reset();                      // rebuild the current scene, t = 0 (stays paused if paused)
-  void restart(const Scene& scene);  // rebuild with new values, t = 0, and play
+  void restart(const Scene& scene);  // rebuild with new values, t = 0, and play (a refused scene changes nothing)
   void set_pacing(const Pacing& pacing);
   void set_threads(int threads);  // solver threads, applied live
   // Pause every run when its simulated time reaches t_s (< 0: never). Play continues
@@ -120,7 +120,8 @@ class SimWorker {
 
  private:
   struct Pending {
-    std::optional<Scene> scene;  // restart with this scene
+    std::optional<Scene> scene;     // restart with this scene
+    long restart_pause_serial = 0;  // pause_serial_ when the restart was asked for
     std::optional<Pacing> pacing;
     std::optional<int> threads;
     std::optional<double> pause_at_s;
@@ -145,7 +146,7 @@ class SimWorker {
 
   void loop();
   bool apply_commands();             // at a step boundary; true if anything changed
-  void rebuild(const Scene& scene);  // worker thread only; keeps the old run if the scene is bad
+  bool rebuild(const Scene& scene);  // worker thread only; false (message_ says why) keeps the old run
   void publish(bool force);          // worker thread only
   void retire_current_run();         // current history -> past runs
   WorkerState current_state() const;
@@ -176,6 +177,9 @@ class SimWorker {
 
   // Commands.
   std::atomic<bool> paused_{false};
+  // Counts pause and single-step commands: a restart plays its new run only if no pause
+  // was asked for after it, and a refused restart leaves the current run as it was.
+  std::atomic<long> pause_serial_{0};
   std::atomic<bool> exit_{false};
   std::atomic<bool> reset_{false};
   std::atomic<int> steps_requested_{0};

@@ -213,6 +213,20 @@ TEST(SimWorker, ABadSceneKeepsTheCurrentRunAndSaysWhy) {
   // The message names the key and the problem, as the command line's does.
   EXPECT_NE(v.message.find("fabric.width_mm"), std::string::npos) << v.message;
   EXPECT_NE(v.message.find("must be positive"), std::string::npos) << v.message;
+  // The kept run is left as it was: still paused at t = 0 (a refused restart used to set it
+  // playing, so wait_idle waited for the whole run; under ASan that outlasted the timeout).
+  EXPECT_EQ(v.state, WorkerState::paused);
+  EXPECT_TRUE(w.paused());
+  EXPECT_EQ(v.step_count, 0);
+  // A good restart still plays, and a pause asked for after it holds.
+  w.restart(small_scene());
+  ASSERT_TRUE(w.wait_for_steps(3, 20s));
+  w.restart(small_scene());
+  w.pause();
+  ASSERT_TRUE(w.wait_idle(10s));
+  w.sync(v);
+  EXPECT_EQ(v.run_id, 3);
+  EXPECT_EQ(v.state, WorkerState::paused);
 }
 
 TEST(SimWorker, ExitWhileRunningJoinsPromptly) {
