@@ -12,6 +12,7 @@ struct Ledger {
   double strain_energy_J = 0;  // stored: elastic springs of the yarn elements + bending springs
   double viscous_J = 0;        // dissipated by the Zener dashpots (integral of mu_d de_v/dt^2)
   double damping_J = 0;        // dissipated by the snap damping of slack elements turning taut (solver.snap_damping)
+                               // and the pin-jointed model's crimp damping (yarn.crimp_damping)
   double friction_work_J = 0;  // dissipated by yarn-yarn friction (Eq 12-15): slip beyond the Coulomb limit
   double stick_energy_J = 0;   // stored: the stick penalty springs of yarn-yarn friction (K/2 e^2, Eq 12)
   double projectile_friction_J = 0;  // dissipated by projectile-yarn friction (Eq 20-22)

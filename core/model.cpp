@@ -326,6 +326,8 @@ Model build_model(const Scene& scene) {
   // Snap damping: a fraction zeta of critical at the chain's highest axial frequency
   // omega_max = 2 c / L, as a stress beta E_inst d(eps)/dt with beta = 2 zeta / omega_max.
   m.element_damping_beta = scene.solver.snap_damping * m.shortest_element / m.wave_speed;
+  // The pin-jointed stretch damping (yarn.crimp_damping), on the same basis, on the apparent strain.
+  m.crimp_damping_beta = m.crimp_strain > 0 ? y.crimp_damping * m.shortest_element / m.wave_speed : 0.0;
 
   // ---- projectile
   m.shape.kind = p.shape;

@@ -83,6 +83,7 @@ struct Model {
   // crimp_fraction (r) of the modulus to all of it over [0, 2 crimp_width], crimp_width = e_c
   // (SolverT::crimp_stage). crimp_strain = 0: no crimp stage (sliding and single-yarn models).
   double crimp_strain = 0, crimp_fraction = 0, crimp_width = 0;
+  double crimp_damping_beta = 0;  // s: beta of the pin-jointed stretch damping (yarn.crimp_damping x L / c)
 
   // --- bending: compression-only springs between midpoints of adjoining elements.
   // bend_mirror >= 0 marks the spring that, in the full fabric, joins a yarn's first

@@ -246,6 +246,11 @@ std::vector<KeyDef> make_defs() {
       "sqrt(L0^2 + L1^2) / L0 - 1 of stretch), as a fraction of the yarn modulus; it rises to the full modulus "
       "as the crimp is taken up",
       1, 0, false, 0.9, yarn.crimp_modulus_fraction);
+  NUM("yarn.crimp_damping", "",
+      "pin-jointed model: damping of a taut element's stretch (the dissipation of crimp interchange, which the "
+      "pinned crossings cannot slide to produce), as a fraction of critical at the elements' highest axial "
+      "mode: its force gains beta E A d(strain)/dt, beta = this x L / c; 0 = none",
+      1, 0, false, 1.0, yarn.crimp_damping);
   text_key(
       defs, "projectile.shape", "sphere, cylinder (flat-faced) or cone", {"sphere", "cylinder", "cone"},
       [](Scene& s, const std::string& v) {
@@ -712,8 +717,8 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   }
   if (!content)
     throw SceneError("", path,
-                     "holds no scene keys (empty or only comments); give a scene file such as " +
-                         default_scene_path() + ", or leave SCENE out for the default scene");
+                     "holds no scene keys (empty or only comments); give a scene file such as " + default_scene_path() +
+                         ", or leave SCENE out for the default scene");
   return parse_scene(text, path, overrides);
 }
 
@@ -752,9 +757,10 @@ void validate_scene(Scene& s) {
     const bool size_changed = f.width_m != built_in.fabric.width_m || f.length_m != built_in.fabric.length_m;
     const std::string size_key = f.width_m >= f.length_m ? "fabric.width_mm" : "fabric.length_mm";
     const std::string too_big_key = size_changed ? size_key : "fabric.spacing_mm";
-    const std::string sizes = "fabric.width_mm = " + fmt(f.width_m * 1e3) + ", fabric.length_mm = " +
-                              fmt(f.length_m * 1e3) + " at fabric.spacing_mm = " + fmt(f.spacing_m * 1e3) +
-                              (f.yarns_per_element > 1 ? " x fabric.yarns_per_element = " + fmt(f.yarns_per_element) : "");
+    const std::string sizes =
+        "fabric.width_mm = " + fmt(f.width_m * 1e3) + ", fabric.length_mm = " + fmt(f.length_m * 1e3) +
+        " at fabric.spacing_mm = " + fmt(f.spacing_m * 1e3) +
+        (f.yarns_per_element > 1 ? " x fabric.yarns_per_element = " + fmt(f.yarns_per_element) : "");
     if (f.width_m / L0 > 4000 || f.length_m / L0 > 4000)
       fail(too_big_key, "more than 4000 yarns per direction (" + fmt(std::round(std::max(f.width_m, f.length_m) / L0)) +
                             ", from " + sizes + "); this would not fit in memory");

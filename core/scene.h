@@ -63,6 +63,7 @@ struct YarnParams {
   // Pin-jointed model: stiffness of the crimp stage (the yarn straightening its crimp before it
   // stretches) as a fraction of the yarn's modulus.
   double crimp_modulus_fraction = 0.05;
+  double crimp_damping = 0.06;  // pin-jointed: damping of the crimp stage, fraction of critical (docs/MODEL.md §1)
 };
 
 struct ProjectileParams {

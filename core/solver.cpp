@@ -74,6 +74,7 @@ class SolverT final : public Solver {
     prev_strain_.assign(ne, Real(0));
     ev_.assign(ne, Real(0));
     stress_.assign(ne, Real(0));
+    crimp_damp_stress_.assign(crimp_damping_k_ > 0 ? ne : 0, Real(0));
     broken_flag_.assign(ne, 0);
     elem_force_.assign(ne, V3::Zero());
     elem_energy_.assign(ne, 0.0);
@@ -283,6 +284,8 @@ class SolverT final : public Solver {
     // and the force factor d(material strain)/d(strain): a crimped element's force is
     // sigma A g'(e), the derivative of its stored energy.
     Real mat = eps, dg = Real(1);
+    const double apparent = double(eps),  // against L0, and its value a step ago
+        apparent_prev = (1 + double(strain_[e])) * (1 + model_.crimp_strain) - 1;
     if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
     const double mat_prev = double(prev_strain_[e]);
     double sig, u, dd = 0;
@@ -305,6 +308,24 @@ class SolverT final : public Solver {
       sig_total = std::max(0.0, sig + damping_k_ * de * zener_.inv_dt);
       damp += (sig_total - sig) * de * vol;
     }
+    // Crimp damping (yarn.crimp_damping, pin-jointed only, docs/MODEL.md §1): a taut element's
+    // force gains beta E A times its apparent strain rate, never below zero. It damps the
+    // lattice ringing a soft-then-stiff crimp stage radiates behind a steep front; slower waves
+    // are damped in proportion to their frequency. Its work is booked as damping_J, over each
+    // step's stretch at the mean of the damping stress at its two ends (the trapezoid; booking
+    // the end-of-step stress alone made the ledger error first order in dt).
+    double sig_force = sig_total * double(dg);
+    if (crimp_damping_k_ > 0) {
+      const double de = apparent - apparent_prev;
+      double extra = 0;
+      if (sig > 0) {
+        const double f = std::max(0.0, sig_force + crimp_damping_k_ * de * zener_.inv_dt);
+        extra = f - sig_force;
+        sig_force = f;
+      }
+      damp += 0.5 * (double(crimp_damp_stress_[e]) + extra) * de * vol;
+      crimp_damp_stress_[e] = Real(extra);
+    }
     prev_strain_[e] = mat;
     strain_[e] = eps;
     diss += dd;
@@ -321,6 +342,7 @@ class SolverT final : public Solver {
       broken_flag_[e] = 1;
       released += elem_energy_[e] + 0.5 * double(stress_[e]) * vol * (double(mat) - mat_prev);
       stress_[e] = 0;
+      if (crimp_damping_k_ > 0) crimp_damp_stress_[e] = 0;
       elem_force_[e].setZero();
       return true;
     }
@@ -329,8 +351,7 @@ class SolverT final : public Solver {
     stress_[e] = Real(sig_total);
     max_strain = std::max(max_strain, double(eps));
     // Force on node b: -sigma A along the element (pulls b towards a).
-    elem_force_[e] =
-        len > Real(0) ? V3(dx * Real(-sig_total * double(dg) * model_.elem_area[e] / double(len))) : V3::Zero();
+    elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig_force * model_.elem_area[e] / double(len))) : V3::Zero();
     return false;
   }
 
@@ -1978,6 +1999,8 @@ class SolverT final : public Solver {
   double escape_radius2_ = 1;
   // beta E_inst of the element damping (model's element_damping_beta times the instantaneous modulus).
   double damping_k_ = model_.element_damping_beta * model_.modulus_inst;
+  double crimp_damping_k_ = model_.crimp_damping_beta * model_.modulus_inst;  // the same for yarn.crimp_damping
+  std::vector<Real> crimp_damp_stress_;  // per element: the crimp damping's stress of the last step
   double damping_cum_ = 0;
 };
 
