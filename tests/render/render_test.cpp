@@ -276,5 +276,33 @@ TEST(RenderSection, SectionCutRemovesTheNearHalf) {
   EXPECT_LT(background_fraction_in_circle(cut, bg, u * w, v * h - 3, 3), 0.5);
 }
 
+// The cut removes the near half (y below the impact point, towards the section camera at
+// -y), not the far one: a whole fabric with only its near half left shows nothing in the
+// section view, and with only its far half left shows that half.
+TEST(RenderSection, TheCutIsOnTheCameraSide) {
+  SyntheticFabric s;
+  s.quarter = false;
+  s.dent_depth_m = 0.012f;
+  s.projectile_z_m = -0.006f;
+  const int w = 320, h = 240;
+  const ViewOptions o = fabric_only(ViewPreset::section);
+  auto drawn_fraction = [&](bool keep_near) {
+    Frame f = make_synthetic_frame(s);
+    for (std::size_t e = 0; e < f.elem_a.size(); ++e) {
+      const float y = 0.5f * (f.node_pos[f.elem_a[e]][1] + f.node_pos[f.elem_b[e]][1]);
+      if ((y < 0) != keep_near) f.elem_broken[e] = 1;  // broken elements are not drawn
+    }
+    const Camera c = render::fitted_camera(f, ViewPreset::section, float(w) / h);
+    const Image img = render_image(f, c, o, w, h);
+    const Image bg = render_image(f, c, background_only(o), w, h);
+    int differ = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) differ += max_channel_diff(img.at(x, y), bg.at(x, y)) > 20;
+    return double(differ) / (w * h);
+  };
+  EXPECT_LT(drawn_fraction(true), 0.002);  // only the near half: all of it is cut away
+  EXPECT_GT(drawn_fraction(false), 0.05);  // only the far half: it is what the section shows
+}
+
 }  // namespace
 }  // namespace ravel::testing

@@ -1,14 +1,20 @@
-// The VTU / PVD writer (core/vtk.h) on a synthetic frame: structure and sizes. The
-// optional ctest `render_vtu_meshio` reads the same files with python3-meshio.
+// The VTU / PVD writer (core/vtk.h) on a synthetic frame: structure, sizes and values read
+// back from the raw arrays; PNGs decoded. The ctest `render_vtu_meshio` reads the same files with python3-meshio.
 #include "core/vtk.h"
 
 #include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "render/renderer.h"
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#include <stb/stb_image.h>
 #include "tests/render/synthetic_frame.h"
 
 namespace ravel::testing {
@@ -57,6 +63,40 @@ TEST(Vtk, SeriesWritesVtuPerFrameAndAPvdIndex) {
   const std::size_t end = vtu.rfind("\n  </AppendedData>");
   ASSERT_NE(end, std::string::npos);
   EXPECT_EQ(end - start, payload);
+
+  // Values read back from the raw arrays (at their offset: an 8-byte length, then the data).
+  // The first copy of the points and cells is the modelled part itself, in frame order.
+  auto array = [&](const std::string& name, std::size_t elem_size, std::size_t count) {
+    const std::size_t at = vtu.find("Name=\"" + name + "\"");
+    EXPECT_NE(at, std::string::npos) << name;
+    const std::size_t off = std::stoull(vtu.substr(vtu.find("offset=\"", at) + 8));
+    std::uint64_t bytes = 0;
+    std::memcpy(&bytes, vtu.data() + start + off, 8);
+    EXPECT_EQ(bytes, elem_size * count) << name;
+    return vtu.data() + start + off + 8;
+  };
+  const char* pts = array("Points", 4, 3 * np);
+  const char* strain = array("strain", 4, nc);
+  const char* broken = array("broken", 1, nc);
+  const char* yarn = array("yarn_id", 4, nc);
+  int broken_seen = 0;
+  for (std::size_t i = 0; i < f.node_pos.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      float v;
+      std::memcpy(&v, pts + 4 * (3 * i + k), 4);
+      ASSERT_EQ(v, f.node_pos[i][k]) << "point " << i;
+    }
+  for (std::size_t e = 0; e < f.elem_a.size(); ++e) {
+    float v;
+    std::memcpy(&v, strain + 4 * e, 4);
+    ASSERT_EQ(v, f.elem_strain[e]) << "strain of cell " << e;
+    ASSERT_EQ(std::uint8_t(broken[e]), f.elem_broken[e]) << "broken flag of cell " << e;
+    broken_seen += broken[e] ? 1 : 0;
+    std::int32_t id;
+    std::memcpy(&id, yarn + 4 * e, 4);
+    EXPECT_GE(id, 0);
+  }
+  EXPECT_GT(broken_seen, 0);  // the synthetic hole (hole_radius_m) is in the file
   // No temporary files left behind (write_file_atomic's are ".NAME.tmpPID_N").
   for (const auto& entry : std::filesystem::directory_iterator(dir))
     EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
@@ -100,6 +140,16 @@ TEST(Vtk, PngIsWrittenWholeWithNoTemporaryLeft) {
   EXPECT_EQ(std::uint8_t(bytes[19]), 16);
   EXPECT_EQ(std::uint8_t(bytes[23]), 8);
   EXPECT_EQ(bytes.substr(bytes.size() - 8, 4), "IEND");
+  // Decoded, it holds exactly the pixels written.
+  int w = 0, h = 0, ch = 0;
+  unsigned char* px = stbi_load((dir + "/a.png").c_str(), &w, &h, &ch, 3);
+  ASSERT_NE(px, nullptr) << stbi_failure_reason();
+  EXPECT_EQ(w, 16);
+  EXPECT_EQ(h, 8);
+  int same = 0;
+  for (std::size_t i = 0; i < rgb.size(); ++i) same += px[i] == rgb[i];
+  stbi_image_free(px);
+  EXPECT_EQ(same, int(rgb.size()));
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     ++files;

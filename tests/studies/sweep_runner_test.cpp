@@ -19,11 +19,12 @@ TEST(SweepRunner, RunsInTheBackgroundAndFeedsTheLiveChart) {
   o.jobs = 2;
   std::string error;
   ASSERT_TRUE(runner.start(o, {"projectile.velocity_mps=100,150,200"}, &error)) << error;
-  int polls = 0, max_rows = 0;
+  int polls = 0, max_rows = 0, partial_polls = 0;
   for (auto t0 = std::chrono::steady_clock::now(); runner.running();) {
     const auto s = runner.snapshot();
     EXPECT_LE(s.progress.done, s.progress.total);
     max_rows = std::max(max_rows, int(s.results.rows.size()));
+    if (!s.finished && !s.results.rows.empty() && s.results.rows.size() < 3) ++partial_polls;
     ++polls;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
     ASSERT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(120));
@@ -32,6 +33,9 @@ TEST(SweepRunner, RunsInTheBackgroundAndFeedsTheLiveChart) {
   EXPECT_TRUE(s.finished) << s.error;
   EXPECT_EQ(s.progress.done, 3);
   ASSERT_EQ(s.results.rows.size(), 3u);
+  // The live chart was fed while the sweep ran: with two jobs for three cases, the third
+  // runs alone for seconds after the first two finished, and the 5 ms polls saw their rows.
+  EXPECT_GT(partial_polls, 0) << "max rows seen while running: " << max_rows;
   const auto charts = s.charts();
   ASSERT_EQ(charts.size(), 2u);  // energy absorbed and residual velocity
   // Charts leave out cases that diverged (they have no answer to plot).
