@@ -41,7 +41,9 @@ const char* to_string(WorkerState s) {
   return "?";
 }
 
-SimWorker::SimWorker(const Scene& scene, bool start_paused) : sim_(std::make_unique<Simulation>(scene)), scene_(scene) {
+SimWorker::SimWorker(const Scene& scene, bool start_paused, ClockFn clock)
+    : sim_(std::make_unique<Simulation>(scene)), scene_(scene) {
+  clock_ = clock ? std::move(clock) : ClockFn([] { return Clock::now(); });
   paused_.store(start_paused);
   pacing_live_ = pacing_;
   publish(true);
@@ -249,7 +251,7 @@ bool SimWorker::rebuild(const Scene& edited) {
   pause_at_fired_ = false;
   message_.clear();
   published_rows_ = 0;
-  anchor_wall_ = Clock::now();
+  anchor_wall_ = clock_();
   anchor_sim_s_ = 0;
   rate_wall_ = anchor_wall_;
   rate_steps_ = 0;
@@ -267,7 +269,7 @@ bool SimWorker::apply_commands() {
     }
     if (p.pacing) {
       pacing_live_ = *p.pacing;
-      anchor_wall_ = Clock::now();
+      anchor_wall_ = clock_();
       anchor_sim_s_ = sim_->time_s();
     }
     if (p.threads) {
@@ -360,7 +362,7 @@ void SimWorker::loop() {
       continue;
     }
 
-    const auto now = Clock::now();
+    const auto now = clock_();
     if (!was_stepping) {
       // (Re)start the pacing clock and the rate meter from here.
       anchor_wall_ = now;
@@ -429,7 +431,7 @@ void SimWorker::loop() {
     }
 
     // Rate meter, over half-second windows.
-    const auto after = Clock::now();
+    const auto after = clock_();
     if (after - rate_wall_ > std::chrono::milliseconds(500)) {
       const double dt = seconds(after - rate_wall_);
       steps_per_s_ = double(sim_->step_count() - rate_steps_) / dt;

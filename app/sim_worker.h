@@ -27,6 +27,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -80,7 +81,10 @@ class SimWorker {
  public:
   // Builds the first Simulation on the calling thread (throws SceneError / whatever the
   // Simulation constructor throws), then starts the thread.
-  explicit SimWorker(const Scene& scene, bool start_paused = false);
+  // The clock that paces slow motion and times the rate meter (steady_clock::now when
+  // empty); a test injects one it advances by hand.
+  using ClockFn = std::function<std::chrono::steady_clock::time_point()>;
+  explicit SimWorker(const Scene& scene, bool start_paused = false, ClockFn clock = {});
   ~SimWorker();  // requests exit and joins
   SimWorker(const SimWorker&) = delete;
   SimWorker& operator=(const SimWorker&) = delete;
@@ -167,6 +171,7 @@ class SimWorker {
   long applied_commands_ = 0;  // commands_issued_ as of the last apply_commands()
   std::chrono::steady_clock::time_point last_publish_{};
   // Pacing anchor: at wall time anchor_wall_ the simulation was at anchor_sim_s_.
+  ClockFn clock_;  // pacing and rate meter
   std::chrono::steady_clock::time_point anchor_wall_{};
   double anchor_sim_s_ = 0;
   // Rate measurement.

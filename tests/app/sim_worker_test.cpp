@@ -142,21 +142,46 @@ TEST(SimWorker, EveryViewIsConsistentWhileRunning) {
   EXPECT_GT(v.step_count, 0);
 }
 
-TEST(SimWorker, SlowMotionPacesSimulatedTimeAgainstWallTime) {
-  SimWorker w(small_scene(), true);
-  w.set_pacing({false, 2.0});  // 2 simulated us per wall second
+// Slow motion against an injected clock, so the check does not depend on the scheduler:
+// with the clock held still the run does not advance, and each time it moves by 0.1 s at
+// 2 simulated us per second the run catches up to exactly 0.2 us more (to one step: it
+// never steps past the allowed time, and steps as long as the next step fits).
+TEST(SimWorker, SlowMotionPacesSimulatedTimeAgainstItsClock) {
+  std::atomic<long long> fake_ns{1'000'000'000};
+  auto clock = [&] { return std::chrono::steady_clock::time_point(std::chrono::nanoseconds(fake_ns.load())); };
+  SimWorker w(small_scene(), true, clock);
+  w.set_pacing({false, 2.0});  // 2 simulated us per second of the clock
   w.play();
-  const auto t0 = std::chrono::steady_clock::now();
-  std::this_thread::sleep_for(700ms);
-  w.pause();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  ASSERT_TRUE(w.wait_idle(10s));
   WorkerView v;
+  auto sim_us_after_settling = [&] {
+    // Wait (real time) until two syncs 50 ms apart agree: the worker has caught up.
+    double last = -1;
+    for (int i = 0; i < 400; ++i) {
+      std::this_thread::sleep_for(50ms);
+      w.sync(v);
+      const double now = v.frame.time_s * 1e6;
+      if (now == last) return now;
+      last = now;
+    }
+    ADD_FAILURE() << "the run never settled";
+    return last;
+  };
+  const double start_us = sim_us_after_settling();
   w.sync(v);
-  // Pacing never runs ahead; it may lag by the start-up and one step.
-  const double sim_us = v.frame.time_s * 1e6;
-  EXPECT_LE(sim_us, 2.0 * wall_s + v.summary.dt_s * 1e6 + 1e-9);
-  EXPECT_GE(sim_us, 2.0 * 0.5 * wall_s);
+  const double dt_us = v.summary.dt_s * 1e6;
+  EXPECT_LE(start_us, dt_us + 1e-9);  // the clock has not moved: at most the first step
+  for (int k = 1; k <= 5; ++k) {
+    fake_ns += 100'000'000;  // 0.1 s: 0.2 us allowed, under the 0.5 us re-anchoring lag
+    const double sim_us = sim_us_after_settling();
+    const double allowed = start_us + 0.2 * k;
+    EXPECT_LE(sim_us, allowed + 1e-9) << "step " << k;
+    EXPECT_GT(sim_us, allowed - dt_us - 1e-9) << "step " << k;
+  }
+  std::this_thread::sleep_for(200ms);  // real time passes, the clock does not: no steps
+  const double held = v.frame.time_s;
+  w.sync(v);
+  EXPECT_EQ(v.frame.time_s, held);
+  w.pause();
 }
 
 TEST(SimWorker, PauseAtStopsAtThatTime) {
