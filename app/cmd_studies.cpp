@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 
@@ -111,17 +112,12 @@ int cmd_sweep(const Args& args) {
           "finished, a rerun resumes)\n",
           mine.size());
     // Each case as it ends: k of N, its outcome, and the time left at the rate so far.
-    const auto sweep_t0 = std::chrono::steady_clock::now();
-    int ended = 0, ran = 0;
+    studies::TimeLeft pace(int(mine.size()));
     hooks.on_case = [&](const studies::CaseResult& r) {
-      ++ended;
-      if (r.skipped) return;
-      ++ran;
-      if (!verbose) return;
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - sweep_t0).count();
-      const double left = ran > 0 ? wall / ran * double(int(mine.size()) - ended) : 0.0;
+      pace.step(r.skipped);
+      if (r.skipped || !verbose) return;
       if (!r.ok) {
-        std::fprintf(stderr, "  [%d/%zu] failed: %s: %s\n", ended, mine.size(), r.c.name().c_str(), r.error.c_str());
+        std::fprintf(stderr, "  %s failed: %s: %s\n", pace.counter().c_str(), r.c.name().c_str(), r.error.c_str());
         return;
       }
       std::string outcome = "?";
@@ -135,8 +131,7 @@ int cmd_sweep(const Args& args) {
         else
           outcome = j.value("end_reason", std::string("stopped"));
       }
-      std::printf("  [%d/%zu] %s: %s%s\n", ended, mine.size(), r.c.name().c_str(), outcome.c_str(),
-                  ended < int(mine.size()) ? ("  (about " + fmt1(left) + " s left)").c_str() : "");
+      std::printf("  %s %s: %s%s\n", pace.counter().c_str(), r.c.name().c_str(), outcome.c_str(), pace.left().c_str());
       std::fflush(stdout);
     };
     hooks.on_progress = [&](const studies::SweepProgress& p) {
@@ -301,15 +296,18 @@ int cmd_paper(const Args& args) {
 #endif
     std::mutex mu;
     std::string last_stage;
+    std::unique_ptr<studies::TimeLeft> pace;  // per stage: its pace so far
     opt.on_progress = [&](const std::string& stage, int done, int total) {
       if (!verbose) return;
       std::lock_guard<std::mutex> lock(mu);
       if (stage != last_stage && !last_stage.empty() && !isatty(fileno(stderr))) std::fprintf(stderr, "\n");
+      if (stage != last_stage || !pace) pace = std::make_unique<studies::TimeLeft>(total);
       last_stage = stage;
+      const std::string at = pace->at(done, total);
       if (isatty(fileno(stderr)))
-        std::fprintf(stderr, "\r  %s: %d/%d   ", stage.c_str(), done, total);
+        std::fprintf(stderr, "\r  %s: %s      ", stage.c_str(), at.c_str());
       else if (done == total || done % 10 == 0)
-        std::fprintf(stderr, "  %s: %d/%d\n", stage.c_str(), done, total);
+        std::fprintf(stderr, "  %s: %s\n", stage.c_str(), at.c_str());
     };
     install_signal_handlers();
     if (verbose)

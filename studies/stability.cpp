@@ -154,9 +154,12 @@ StabilityResult run_stability(const StabilityOptions& opt_in, const std::atomic<
     so.jobs = opt.jobs;
     so.solver_threads = opt.solver_threads;
     SweepHooks hooks;
+    TimeLeft pace(int(cases.size()));
     hooks.on_case = [&](const CaseResult& r) {
+      pace.step(r.skipped);
       if (opt.on_progress && !r.skipped)
-        opt.on_progress(m.name + ": " + r.c.name() + (r.ok ? "" : " FAILED: " + r.error));
+        opt.on_progress(m.name + " " + pace.counter() + ": " + r.c.name() + (r.ok ? "" : " FAILED: " + r.error) +
+                        pace.left());
     };
     const auto rep = run_sweep(cases, cases, so, {m.y.key, m.x.key}, hooks, interrupt);
     if (rep.interrupted) res.interrupted = true;

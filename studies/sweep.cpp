@@ -560,4 +560,39 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
   return rep;
 }
 
+namespace {
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+std::string left_text(double s) {
+  char b[64];
+  if (s >= 120)
+    std::snprintf(b, sizeof b, "  (about %.0f min left)", s / 60);
+  else
+    std::snprintf(b, sizeof b, s < 10 ? "  (about %.1f s left)" : "  (about %.0f s left)", s);
+  return b;
+}
+}  // namespace
+
+TimeLeft::TimeLeft(int total) : total_(total), t0_s_(now_s()) {}
+
+void TimeLeft::step(bool skipped) {
+  ++ended_;
+  if (!skipped) ++ran_;
+}
+
+std::string TimeLeft::counter() const {
+  return "[" + std::to_string(ended_) + "/" + std::to_string(total_) + "]";
+}
+
+std::string TimeLeft::left() const {
+  return ran_ > 0 && ended_ < total_ ? left_text((now_s() - t0_s_) / ran_ * double(total_ - ended_)) : "";
+}
+
+std::string TimeLeft::at(int done, int total) const {
+  std::string s = "[" + std::to_string(done) + "/" + std::to_string(total) + "]";
+  if (done > 0 && done < total) s += left_text((now_s() - t0_s_) / done * double(total - done));
+  return s;
+}
+
 }  // namespace ravel::studies

@@ -82,6 +82,23 @@ struct CaseResult {
   std::string summary_json_text;  // the case's summary.json
 };
 
+// The pace of a batch of runs, for progress lines: after each run, "[k/N]" and, while runs
+// remain, "  (about T s left)" at the mean time of the runs done so far (runs found
+// finished cost nothing and do not count in the pace).
+class TimeLeft {
+ public:
+  explicit TimeLeft(int total);
+  void step(bool skipped);      // counts one finished run
+  std::string counter() const;  // "[k/N]"
+  std::string left() const;     // "  (about T s left)", or "" when none remain or none ran yet
+  // For a stage that reports only done of total: "[k/N]" and the time left at that pace.
+  std::string at(int done, int total) const;
+
+ private:
+  int total_, ended_ = 0, ran_ = 0;
+  double t0_s_;
+};
+
 struct SweepProgress {
   int total = 0;    // cases in this shard
   int done = 0;     // finished now or before

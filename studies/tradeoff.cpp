@@ -317,13 +317,16 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
         opt.solver_threads == 1 ? "user time of the case's thread" : "user time of the process (one case at a time)";
     write_file_atomic(tmp + "/cost.json", c.dump(2) + "\n");
   };
+  TimeLeft pace(int(cases.size()));
   hooks.on_case = [&](const CaseResult& r) {
+    pace.step(r.skipped);
     if (r.skipped)
       ++res.runs_skipped;
     else
       ++res.runs;
     if (opt.on_progress && !r.skipped)
-      opt.on_progress(r.ok ? "done " + r.c.name() : "FAILED " + r.c.name() + ": " + r.error);
+      opt.on_progress(pace.counter() + (r.ok ? " done " + r.c.name() : " FAILED " + r.c.name() + ": " + r.error) +
+                      pace.left());
   };
   if (opt.solver_threads != 1 && opt.jobs != 1)
     res.warnings.push_back("CPU time per case is only measured with --threads 1 or --jobs 1");
@@ -365,8 +368,9 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
           ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
           ov.push_back("output.progress=false");
           try {
-            auto r = find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, {}, opt.out_dir + "/limit/" + name),
-                                          opt.limit_options, false);
+            auto r =
+                find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, {}, opt.out_dir + "/limit/" + name),
+                                     opt.limit_options, false);
             if (interrupt && interrupt->load()) return;
             write_file_atomic(path, limit_json(r, opt.limit_options, opt.scene_path, ov));
             if (r.converged) v = r.ballistic_limit_mps;
