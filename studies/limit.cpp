@@ -217,16 +217,6 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
     res.warnings.push_back(failed          ? "search stopped by a failed run before the bracket reached the tolerance"
                            : budget_left() ? "undecided runs inside the bracket left nothing to bisect"
                                            : "run budget exhausted before the bracket reached the tolerance");
-  // Monotonicity check over every run made.
-  for (const auto& s : res.runs) {
-    if (s.failed || (!s.decided && !s.perforated)) continue;
-    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
-      char b[200];
-      std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
-                    s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
-      res.warnings.push_back(b);
-    }
-  }
   if (with_fit && !failed) {
     for (double f : opt.fit_factors) {
       const double vf = res.ballistic_limit_mps * f;
@@ -241,6 +231,17 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
         vrs.push_back(s.residual_velocity_mps);
       }
     res.fit = fit_lambert_jonas(vs, vrs, res.ballistic_limit_mps);
+  }
+  // Monotonicity check over every run made, the fit's runs among them (a run well above the
+  // bracket that stops says the outcome is not a threshold in velocity).
+  for (const auto& s : res.runs) {
+    if (s.failed || (!s.decided && !s.perforated)) continue;
+    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
+      char b[200];
+      std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
+                    s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
+      res.warnings.push_back(b);
+    }
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

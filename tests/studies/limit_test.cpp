@@ -144,6 +144,26 @@ TEST(BallisticLimit, SearchWithTheFitRecoversTheSyntheticLaw) {
   EXPECT_NEAR(r.fit.a, 0.8, 0.01);
 }
 
+// A fit run that stops above the bracket is reported: the outcome is then no threshold in
+// velocity (the pin-jointed default scene stopped at 133 m/s after perforating at 107-125).
+TEST(BallisticLimit, AStoppedFitRunAboveTheBracketIsReported) {
+  const ShootFn law = synthetic_target(0.9, 2.0, 70.0);
+  const ShootFn island = [&](double v, const std::string& why) {
+    Shot s = law(v, why);
+    if (v > 85 && v < 90) s = Shot{}, s.end_reason = "rebounded";  // 70 x 1.25 = 87.5 lands here
+    return s;
+  };
+  LimitOptions o;
+  o.tolerance_mps = 0.5;
+  const auto r = find_ballistic_limit(island, o, true);
+  EXPECT_NEAR(r.ballistic_limit_mps, 70.0, 0.25);
+  bool reported = false;
+  for (const auto& w : r.warnings) reported |= w.find("non-monotone outcome: 87.") != std::string::npos;
+  EXPECT_TRUE(reported) << "no warning for the stopped fit run";
+  // Without it the same search is clean.
+  EXPECT_TRUE(find_ballistic_limit(law, o, true).warnings.empty());
+}
+
 // The real thing on the cheap scene: the bracket's ends are runs that did (not) perforate,
 // and the search stops at the tolerance.
 TEST(BallisticLimit, CheapSceneBracketsAndConverges) {
