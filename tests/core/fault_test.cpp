@@ -153,7 +153,6 @@ TEST(Fault, CompletedRunsWriteNullFaultFields) {
   EXPECT_TRUE(j["divergence_time_s"].is_null());
 }
 
-
 // The default scene at 260 m/s re-chooses tracked pairs in the folded, bunched yarns under
 // the projectile after the first breaks (116 times here, SPEC §4's search assumption was
 // reported as "lower solver.dt_factor" beside a suggestion to raise it). The yarns moved
