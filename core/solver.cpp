@@ -284,8 +284,7 @@ class SolverT final : public Solver {
     // and the force factor d(material strain)/d(strain): a crimped element's force is
     // sigma A g'(e), the derivative of its stored energy.
     Real mat = eps, dg = Real(1);
-    const double apparent = double(eps),  // against L0, and its value a step ago
-        apparent_prev = (1 + double(strain_[e])) * (1 + model_.crimp_strain) - 1;
+    const double apparent = double(eps);  // against L0 (crimp_stage turns eps into the yarn's own strain)
     if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
     const double mat_prev = double(prev_strain_[e]);
     double sig, u, dd = 0;
@@ -316,7 +315,8 @@ class SolverT final : public Solver {
     // the end-of-step stress alone made the ledger error first order in dt).
     double sig_force = sig_total * double(dg);
     if (crimp_damping_k_ > 0) {
-      const double de = apparent - apparent_prev;
+      // strain_[e] still holds last step's own strain: its apparent strain a step ago.
+      const double de = apparent - ((1 + double(strain_[e])) * (1 + model_.crimp_strain) - 1);
       double extra = 0;
       if (sig > 0) {
         const double f = std::max(0.0, sig_force + crimp_damping_k_ * de * zener_.inv_dt);
