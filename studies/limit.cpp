@@ -154,12 +154,14 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   // Bracket: walk from the start velocity by the growth factor until the outcome flips
   // (downwards from a perforation, upwards from a stop or an undecided run).
   double v = std::clamp(opt.start_mps, opt.min_mps, opt.max_mps);
+  double step = opt.growth;
   Outcome o = fire(v, "bracket");
   double lo = -1, hi = -1;
   bool down = o == perforated;
   if (!failed && o != undecided) (o == perforated ? hi : lo) = v;
   while (budget_left() && (lo < 0 || hi < 0)) {
-    v = down ? v / opt.growth : v * opt.growth;
+    v = down ? v / step : v * step;
+    step = std::pow(step, std::max(1.0, opt.growth_accel));
     if (v < opt.min_mps || v > opt.max_mps) break;
     o = fire(v, "bracket");
     if (failed) break;
@@ -390,6 +392,7 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   j["overrides"] = overrides;
   j["start_mps"] = opt.start_mps;
   j["growth"] = opt.growth;
+  j["growth_accel"] = opt.growth_accel;
   j["wall_time_s"] = r.wall_time_s;
   j["runs_per_hour"] = r.wall_time_s > 0 ? double(r.runs.size()) / (r.wall_time_s / 3600) : 0.0;
   return j.dump(2) + "\n";

@@ -37,8 +37,12 @@ struct Shot {
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
 
 struct LimitOptions {
-  double start_mps = 100;      // first velocity tried
-  double growth = 1.5;         // bracketing factor
+  double start_mps = 100;  // first velocity tried
+  double growth = 1.5;     // bracketing factor
+  // Each further bracketing step raises the factor to this power (1 = constant steps): a
+  // search that starts near its limit takes small steps, one that starts far off still
+  // reaches it in a few (1.15, 1.23, 1.37, 1.6, 2.0, ... with 1.5).
+  double growth_accel = 1.0;
   double tolerance_mps = 1.0;  // stop when hi - lo <= tolerance
   double min_mps = 1, max_mps = 3000;
   int max_runs = 60;
