@@ -37,6 +37,16 @@ struct Frame {
   std::vector<std::uint8_t> yarn_family;
   std::vector<float> elem_strain;     // engineering strain
   std::vector<float> elem_stress_pa;  // axial stress
+
+  // Yarn-yarn crossings of the sliding model (empty for the pin-jointed model): the node
+  // each yarn's contact is tracked at, the crossing's grid indices (I along x, J along y),
+  // the normal force of the last step (N, this modelled crossing: half or a quarter of a
+  // real one on a symmetry plane), its slip rate (m/s) and whether it is still a contact
+  // (released crossings: ravelled out, passed through, inside a clamp).
+  std::vector<std::uint32_t> crossing_warp_node, crossing_weft_node;
+  std::vector<std::int32_t> crossing_i, crossing_j;
+  std::vector<float> crossing_normal_force_n, crossing_slip_rate;
+  std::vector<std::uint8_t> crossing_active;
   float failure_strain = 0.052f;
   float yarn_diameter_m = 0.2e-3f;  // drawn tube diameter (contact diameter D)
 

@@ -355,7 +355,11 @@ Simulation::Simulation(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 Simulation::~Simulation() = default;
 
 bool Simulation::step() {
-  return impl_->step();
+  // Stepped one at a time (the app's worker): the wall time is the steps' own.
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool alive = impl_->step();
+  impl_->wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return alive;
 }
 
 void Simulation::run(const std::atomic<bool>* interrupt, const std::function<void(const Simulation&)>& on_sample) {
@@ -490,8 +494,10 @@ Summary Simulation::summary() const {
                          "; the 3 x 3 search assumes at most one; lower solver.dt_factor");
   if (d.repaired)
     s.warnings.push_back("nearest-pair search: the tracked node pair of a crossing moved more than one node " +
-                         std::to_string(d.repaired) + " times while its yarns moved less than half a node against "
-                         "each other" + at(d.first_repair_time, d.first_repair_i, d.first_repair_j) +
+                         std::to_string(d.repaired) +
+                         " times while its yarns moved less than half a node against "
+                         "each other" +
+                         at(d.first_repair_time, d.first_repair_i, d.first_repair_j) +
                          ": the yarns' shape changed (folded, bunched or apart near the projectile), they did not "
                          "outrun the search; a smaller time step does not change it");
   if (d.ravelled)
@@ -542,12 +548,28 @@ Frame Simulation::frame() const {
     f.node_pos[i] = {float(x.x()), float(x.y()), float(x.z())};
     f.node_vel[i] = {float(v.x()), float(v.y()), float(v.z())};
   }
-  for (size_t c = 0; c < m.crossings.size(); ++c) {
-    const float r = float(S.crossing_slip_rate(int(c)));
-    if (r <= 0) continue;
+  const size_t nc = m.crossings.size();
+  f.crossing_warp_node.resize(nc);
+  f.crossing_weft_node.resize(nc);
+  f.crossing_i.resize(nc);
+  f.crossing_j.resize(nc);
+  f.crossing_normal_force_n.resize(nc);
+  f.crossing_slip_rate.resize(nc);
+  f.crossing_active.resize(nc);
+  for (size_t c = 0; c < nc; ++c) {
+    const int ci = int(c);
+    const float r = float(S.crossing_slip_rate(ci));
     const auto& cr = m.crossings[c];
-    const int a = m.yarn_node(cr.warp_yarn, S.crossing_warp_node(int(c)));
-    const int b = m.yarn_node(cr.weft_yarn, S.crossing_weft_node(int(c)));
+    const int a = m.yarn_node(cr.warp_yarn, S.crossing_warp_node(ci));
+    const int b = m.yarn_node(cr.weft_yarn, S.crossing_weft_node(ci));
+    f.crossing_warp_node[c] = std::uint32_t(a);
+    f.crossing_weft_node[c] = std::uint32_t(b);
+    f.crossing_i[c] = cr.grid_i;
+    f.crossing_j[c] = cr.grid_j;
+    f.crossing_normal_force_n[c] = float(S.crossing_normal_force(ci));
+    f.crossing_slip_rate[c] = r;
+    f.crossing_active[c] = S.crossing_active(ci) ? 1 : 0;
+    if (r <= 0) continue;
     f.node_slip_rate[a] = std::max(f.node_slip_rate[a], r);
     f.node_slip_rate[b] = std::max(f.node_slip_rate[b], r);
   }

@@ -59,6 +59,26 @@ void array(std::ostringstream& xml, Appended& app, const char* name, const std::
 
 }  // namespace
 
+YarnHalfCounts yarn_half_counts(const Frame& f) {
+  YarnHalfCounts h;
+  for (std::size_t y = 0; y < f.yarn_grid.size() && y < f.yarn_family.size(); ++y) {
+    int& m = f.yarn_family[y] == 0 ? h.hx : h.hy;
+    m = std::max(m, std::abs(f.yarn_grid[y]));
+  }
+  return h;
+}
+
+int whole_fabric_yarn_id(const Frame& f, int element, float sign_x, float sign_y, const YarnHalfCounts& half) {
+  if (element < 0 || std::size_t(element) >= f.elem_yarn.size()) return -1;
+  const int id = int(f.elem_yarn[std::size_t(element)]);
+  if (f.yarn_grid.empty() || f.yarn_grid.size() != f.yarn_family.size() || std::size_t(id) >= f.yarn_grid.size())
+    return id;
+  const bool warp = f.yarn_family[std::size_t(id)] == 0;
+  const int sign = (warp ? sign_x : sign_y) < 0 ? -1 : 1;
+  const int g = f.yarn_grid[std::size_t(id)];
+  return warp ? sign * g + half.hx : (2 * half.hx + 1) + sign * g + half.hy;
+}
+
 bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string* error) {
   std::vector<std::array<float, 2>> copies = {{1, 1}};
   if (mirror && f.mirror_x) copies.push_back({-1, 1});
@@ -86,12 +106,8 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       slip.push_back(i < f.node_slip_rate.size() ? f.node_slip_rate[i] : 0.0f);
       point_dup.push_back((m[0] < 0 && std::abs(p[0]) < kOnPlane) || (m[1] < 0 && std::abs(p[1]) < kOnPlane));
     }
-  // Whole-fabric yarn ids: warp I -> I + hx, weft J -> (2 hx + 1) + J + hy, with the grid
-  // indices of a mirrored copy negated.
-  int hx = 0, hy = 0;
-  for (std::size_t y = 0; y < f.yarn_grid.size() && y < f.yarn_family.size(); ++y)
-    (f.yarn_family[y] == 0 ? hx : hy) = std::max(f.yarn_family[y] == 0 ? hx : hy, std::abs(f.yarn_grid[y]));
   const bool have_grid = !f.yarn_grid.empty() && f.yarn_grid.size() == f.yarn_family.size();
+  const YarnHalfCounts half = yarn_half_counts(f);
 
   std::vector<std::int64_t> connectivity, offsets;
   std::vector<std::uint8_t> types, broken, family, copy, cell_dup;
@@ -114,16 +130,13 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       stress.push_back(e < f.elem_stress_pa.size() ? f.elem_stress_pa[e] : 0.0f);
       broken.push_back(e < f.elem_broken.size() ? f.elem_broken[e] : 0);
       family.push_back(e < f.elem_family.size() ? f.elem_family[e] : 0);
-      std::int32_t id = e < f.elem_yarn.size() ? static_cast<std::int32_t>(f.elem_yarn[e]) : -1;
+      const std::int32_t own = e < f.elem_yarn.size() ? static_cast<std::int32_t>(f.elem_yarn[e]) : -1;
       bool dup = false;
-      if (have_grid && id >= 0 && std::size_t(id) < f.yarn_grid.size()) {
-        const bool warp = f.yarn_family[id] == 0;
-        const float sign = warp ? copies[c][0] : copies[c][1];
-        const int g = f.yarn_grid[id];
-        dup = sign < 0 && g == 0;
-        id = warp ? int(sign) * g + hx : (2 * hx + 1) + int(sign) * g + hy;
+      if (have_grid && own >= 0 && std::size_t(own) < f.yarn_grid.size()) {
+        const float sign = f.yarn_family[own] == 0 ? copies[c][0] : copies[c][1];
+        dup = sign < 0 && f.yarn_grid[own] == 0;
       }
-      yarn.push_back(id);
+      yarn.push_back(whole_fabric_yarn_id(f, int(e), copies[c][0], copies[c][1], half));
       copy.push_back(static_cast<std::uint8_t>(c));
       cell_dup.push_back(dup);
     }

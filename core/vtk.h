@@ -19,6 +19,20 @@ namespace ravel {
 // the frame's mirror_x / mirror_y say) so the file holds the whole fabric.
 bool write_vtu(const Frame& frame, const std::string& path, bool mirror = true, std::string* error = nullptr);
 
+// Whole-fabric yarn id of element `element` of the frame seen in the copy mirrored by
+// (sign_x, sign_y) (each +1 or -1): warp I -> I + hx, weft J -> 2 hx + 1 + J + hy, with the
+// grid indices of a mirrored copy negated, so ids are unique across the copies (the VTU
+// files' yarn_id, the app's picked element). -1 for an element the frame does not have.
+// `half` (from yarn_half_counts) saves scanning the yarns at every call.
+struct YarnHalfCounts {
+  int hx = 0, hy = 0;  // largest |grid index| of the warp / weft yarns
+};
+YarnHalfCounts yarn_half_counts(const Frame& frame);
+int whole_fabric_yarn_id(const Frame& frame, int element, float sign_x, float sign_y, const YarnHalfCounts& half);
+inline int whole_fabric_yarn_id(const Frame& frame, int element, float sign_x, float sign_y) {
+  return whole_fabric_yarn_id(frame, element, sign_x, sign_y, yarn_half_counts(frame));
+}
+
 struct PvdEntry {
   double time_s = 0;
   std::string file;  // relative to the .pvd's folder
