@@ -1,6 +1,8 @@
 // Colour maps, written out by hand as key points (linear interpolation between them).
 // turbo: a rainbow with monotonic lightness in each half, reads well on a dark
-// background; viridis: perceptually uniform, for colour-blind safe figures.
+// background; viridis: perceptually uniform, for colour-blind safe figures; inferno:
+// perceptually uniform from black through red to yellow (prints well in grey too); gray:
+// lightness only, for figures that will be printed in black and white.
 #include <algorithm>
 #include <cmath>
 
@@ -18,6 +20,12 @@ constexpr float kTurbo[][3] = {{0.19f, 0.07f, 0.23f}, {0.27f, 0.44f, 0.92f}, {0.
 constexpr float kViridis[][3] = {{0.267f, 0.005f, 0.329f}, {0.253f, 0.265f, 0.530f}, {0.164f, 0.471f, 0.558f},
                                  {0.135f, 0.659f, 0.518f}, {0.478f, 0.821f, 0.318f}, {0.993f, 0.906f, 0.144f}};
 
+constexpr float kInferno[][3] = {{0.001f, 0.000f, 0.014f}, {0.120f, 0.047f, 0.282f}, {0.327f, 0.060f, 0.430f},
+                                 {0.522f, 0.134f, 0.419f}, {0.715f, 0.215f, 0.330f}, {0.878f, 0.341f, 0.200f},
+                                 {0.976f, 0.540f, 0.039f}, {0.983f, 0.770f, 0.180f}, {0.988f, 0.998f, 0.645f}};
+
+constexpr float kGray[][3] = {{0.10f, 0.10f, 0.10f}, {0.95f, 0.95f, 0.95f}};
+
 template <int N>
 Vec3 sample(const float (&table)[N][3], float t) {
   if (!(t >= 0)) t = 0;  // also catches NaN
@@ -31,7 +39,40 @@ Vec3 sample(const float (&table)[N][3], float t) {
 }  // namespace
 
 Vec3 colormap(ColorMap map, float t) {
-  return map == ColorMap::viridis ? sample(kViridis, t) : sample(kTurbo, t);
+  switch (map) {
+    case ColorMap::viridis:
+      return sample(kViridis, t);
+    case ColorMap::inferno:
+      return sample(kInferno, t);
+    case ColorMap::gray:
+      return sample(kGray, t);
+    case ColorMap::turbo:
+      break;
+  }
+  return sample(kTurbo, t);
+}
+
+const char* to_string(ColorMap m) {
+  switch (m) {
+    case ColorMap::turbo:
+      return "turbo";
+    case ColorMap::viridis:
+      return "viridis";
+    case ColorMap::inferno:
+      return "inferno";
+    case ColorMap::gray:
+      return "gray";
+  }
+  return "?";
+}
+
+bool parse_color_map(const std::string& name, ColorMap* out) {
+  for (ColorMap m : {ColorMap::turbo, ColorMap::viridis, ColorMap::inferno, ColorMap::gray})
+    if (name == to_string(m)) {
+      if (out) *out = m;
+      return true;
+    }
+  return false;
 }
 
 const char* to_string(ColorField f) {

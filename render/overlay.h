@@ -22,6 +22,8 @@ class OverlayBatch {
   void rect(float x0, float y0, float x1, float y1, Rgba c) { quad(x0, y0, x1, y1, c, c, c, c); }
   // Corners: top-left, top-right, bottom-right, bottom-left.
   void quad(float x0, float y0, float x1, float y1, Rgba tl, Rgba tr, Rgba br, Rgba bl);
+  // A straight line of the given width (pixels) from (x0, y0) to (x1, y1).
+  void line(float x0, float y0, float x1, float y1, float width, Rgba c);
   // Text with its top-left at (x, y); each font pixel becomes scale x scale pixels.
   void text(float x, float y, const std::string& s, float scale, Rgba c);
   // Text with a dark drop shadow, for reading on any background.

@@ -292,7 +292,7 @@ struct Renderer::Impl {
   void load_colormap(ColorMap map);
   void draw_mesh(const Mesh& m, const Mat4& model, const std::array<float, 9>& nmat, const Vec3& color, float shininess,
                  float specular);
-  void draw_overlay(const Frame& frame, const ViewOptions& o, int w, int h);
+  void draw_overlay(const Frame& frame, const Camera& camera, const ViewOptions& o, int w, int h);
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
@@ -783,7 +783,7 @@ void Renderer::draw(const Frame& frame, const Camera& camera, const ViewOptions&
   glDisable(GL_CULL_FACE);
   glEnable(GL_BLEND);
   glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
-  r.draw_overlay(frame, o, w, h);
+  r.draw_overlay(frame, camera, o, w, h);
   glDisable(GL_BLEND);
   glDisable(GL_SCISSOR_TEST);
   glBindVertexArray(0);
@@ -800,7 +800,16 @@ static std::vector<std::string> title_lines(ColorField f) {
   return {t};
 }
 
-void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int w, int h) {
+// A round length (1, 2 or 5 x 10^k) near `target`.
+static float round_length(float target) {
+  if (!(target > 0)) return 0;
+  const float p = std::pow(10.0f, std::floor(std::log10(target)));
+  for (float m : {5.0f, 2.0f, 1.0f})
+    if (m * p <= target) return m * p;
+  return p;
+}
+
+void Renderer::Impl::draw_overlay(const Frame& frame, const Camera& camera, const ViewOptions& o, int w, int h) {
   overlay.clear();
   const float s = o.ui_scale > 0 ? o.ui_scale : std::max(1.0f, std::round(h / 520.0f));
   const float pad = 5 * s, line = 11 * s;
@@ -808,6 +817,90 @@ void Renderer::Impl::draw_overlay(const Frame& frame, const ViewOptions& o, int 
   const Rgba panel{0.02f, 0.03f, 0.05f, 0.45f};
   // Panel height for n text lines.
   auto block = [&](std::size_t n) { return n * line - (line - 7 * s) + 2 * pad; };
+  const float aspect = float(w) / float(std::max(1, h));
+
+  // The picked item: a bright line over the element (or the crossing's two nodes) and a
+  // ring at its middle, drawn in the copy the user picked.
+  auto to_px = [&](const std::array<float, 3>& p, const std::array<float, 3>& m, float* x, float* y) {
+    float u = 0, v = 0;
+    if (!camera.project(Vec3{p[0] * m[0], p[1] * m[1], p[2] * m[2]}, aspect, &u, &v)) return false;
+    *x = u * float(w);
+    *y = v * float(h);
+    return true;
+  };
+  auto mark = [&](const std::array<float, 3>& a, const std::array<float, 3>& b) {
+    float xa = 0, ya = 0, xb = 0, yb = 0;
+    if (!to_px(a, o.highlight_mirror, &xa, &ya) || !to_px(b, o.highlight_mirror, &xb, &yb)) return;
+    const Rgba hl{1.0f, 0.2f, 0.85f, 1.0f}, shadow{0, 0, 0, 0.8f};
+    overlay.line(xa, ya, xb, yb, 4 * s, shadow);
+    overlay.line(xa, ya, xb, yb, 2 * s, hl);
+    const float cx = 0.5f * (xa + xb), cy = 0.5f * (ya + yb), r = 7 * s;
+    constexpr int n = 20;
+    for (int i = 0; i < n; ++i) {
+      const float t0 = 6.2831853f * i / n, t1 = 6.2831853f * (i + 1) / n;
+      overlay.line(cx + r * std::cos(t0), cy + r * std::sin(t0), cx + r * std::cos(t1), cy + r * std::sin(t1), 1.5f * s,
+                   hl);
+    }
+  };
+  const std::size_t np = frame.node_pos.size();
+  if (o.highlight_element >= 0 && std::size_t(o.highlight_element) < frame.elem_a.size()) {
+    const std::size_t e = std::size_t(o.highlight_element);
+    if (frame.elem_a[e] < np && frame.elem_b[e] < np)
+      mark(frame.node_pos[frame.elem_a[e]], frame.node_pos[frame.elem_b[e]]);
+  }
+  if (o.highlight_crossing >= 0 && std::size_t(o.highlight_crossing) < frame.crossing_warp_node.size()) {
+    const std::size_t c = std::size_t(o.highlight_crossing);
+    const std::uint32_t a = frame.crossing_warp_node[c], b = frame.crossing_weft_node[c];
+    if (a < np && b < np) mark(frame.node_pos[a], frame.node_pos[b]);
+  }
+
+  // Axes triad, lower left: the world axes as the camera sees them (x red, y green, z blue).
+  float corner_x = 2 * pad;
+  if (o.show_axes) {
+    const float len = 22 * s, cx = 2 * pad + len + 6 * s, cy = h - 2 * pad - len - 6 * s;
+    const Vec3 rt = camera.right(), up = camera.up(), fwd = camera.forward();
+    struct Axis {
+      Vec3 dir;
+      Rgba colour;
+      const char* name;
+    };
+    Axis axes[3] = {{{1, 0, 0}, {0.95f, 0.35f, 0.32f, 1}, "x"},
+                    {{0, 1, 0}, {0.45f, 0.88f, 0.40f, 1}, "y"},
+                    {{0, 0, 1}, {0.40f, 0.62f, 1.0f, 1}, "z"}};
+    // Far axes first, so the near ones are drawn on top.
+    std::sort(std::begin(axes), std::end(axes),
+              [&](const Axis& a, const Axis& b) { return dot(a.dir, fwd) > dot(b.dir, fwd); });
+    overlay.rect(cx - len - 6 * s, cy - len - 6 * s, cx + len + 6 * s, cy + len + 6 * s, panel);
+    for (const Axis& a : axes) {
+      const float dx = dot(a.dir, rt) * len, dy = -dot(a.dir, up) * len;
+      overlay.line(cx, cy, cx + dx, cy + dy, 2 * s, a.colour);
+      const float lx = cx + 1.2f * dx - 0.5f * OverlayBatch::text_width(a.name, s), ly = cy + 1.2f * dy - 3.5f * s;
+      if (std::abs(dx) + std::abs(dy) > 4 * s) overlay.text_shadowed(lx, ly, a.name, s, a.colour);
+    }
+    corner_x = cx + len + 6 * s + 2 * pad;
+  }
+  // Scale bar, lower left beside the triad: a round length in mm, true at the camera's
+  // target (the fabric's centre plane in the presets).
+  if (o.show_scale_bar) {
+    const float px_per_m =
+        float(h) / (2.0f * camera.distance_m * std::tan(0.5f * camera.fov_y_deg * 3.14159265f / 180));
+    const float length_m = round_length(110 * s / px_per_m);
+    if (length_m > 0) {
+      const float bar = length_m * px_per_m, y = h - 2 * pad - 10 * s;
+      char label[32];
+      if (length_m >= 1e-3f)
+        std::snprintf(label, sizeof label, "%g mm", std::round(length_m * 1e4f) / 10);
+      else
+        std::snprintf(label, sizeof label, "%g um", std::round(length_m * 1e7f) / 10);
+      const float tw = OverlayBatch::text_width(label, s);
+      const float x0 = corner_x, x1 = corner_x + bar;
+      overlay.rect(x0 - pad, y - line - pad, std::max(x1, x0 + tw) + pad, y + 4 * s + pad, panel);
+      overlay.rect(x0, y, x1, y + 3 * s, white);
+      overlay.rect(x0, y - 3 * s, x0 + s, y + 3 * s, white);
+      overlay.rect(x1 - s, y - 3 * s, x1, y + 3 * s, white);
+      overlay.text_shadowed(x0, y - line, label, s, white);
+    }
+  }
 
   if (o.show_caption) {
     std::vector<std::string> lines = caption_lines(frame, o);

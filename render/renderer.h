@@ -36,7 +36,9 @@ bool parse_color_field(const std::string& name, ColorField* out);
 // Colour-bar title with units, e.g. "strain / failure strain", "speed (m/s)".
 const char* field_title(ColorField f);
 
-enum class ColorMap { turbo, viridis };
+enum class ColorMap { turbo, viridis, inferno, gray };
+const char* to_string(ColorMap m);
+bool parse_color_map(const std::string& name, ColorMap* out);
 // The map at t in [0, 1] (clamped), linear RGB in [0, 1].
 Vec3 colormap(ColorMap map, float t);
 
@@ -117,6 +119,14 @@ struct ViewOptions {
   bool show_broken_stubs = true;  // frayed stubs where an element broke
   bool show_colorbar = true;
   bool show_caption = true;
+  bool show_scale_bar = true;  // a bar of a round length in mm, true at the camera's target depth
+  bool show_axes = true;       // x / y / z triad in the lower left corner, turning with the camera
+
+  // A picked item drawn over the fabric (render/picking.h): the element (modelled index) in
+  // the copy mirrored by highlight_mirror, or a crossing's two tracked nodes. -1 = none.
+  int highlight_element = -1;
+  int highlight_crossing = -1;
+  std::array<float, 3> highlight_mirror{1, 1, 1};
   bool show_background = true;  // gradient; otherwise clear to background_bottom
 
   // Cut away y < (projectile y) to show a section through the impact point. Always on

@@ -14,6 +14,15 @@ void OverlayBatch::quad(float x0, float y0, float x1, float y1, Rgba tl, Rgba tr
   vertices_.insert(vertices_.end(), {a, b, c, a, c, d});
 }
 
+void OverlayBatch::line(float x0, float y0, float x1, float y1, float width, Rgba c) {
+  const float dx = x1 - x0, dy = y1 - y0, len = std::sqrt(dx * dx + dy * dy);
+  if (!(len > 0)) return;
+  const float nx = -dy / len * 0.5f * width, ny = dx / len * 0.5f * width;
+  const OverlayVertex a{x0 + nx, y0 + ny, c.r, c.g, c.b, c.a}, b{x1 + nx, y1 + ny, c.r, c.g, c.b, c.a},
+      d{x1 - nx, y1 - ny, c.r, c.g, c.b, c.a}, e{x0 - nx, y0 - ny, c.r, c.g, c.b, c.a};
+  vertices_.insert(vertices_.end(), {a, b, d, a, d, e});
+}
+
 void OverlayBatch::text(float x, float y, const std::string& s, float scale, Rgba c) {
   if (s.empty()) return;
   // stb_easy_font writes 4 vertices of 16 bytes per quad; about 270 bytes per character.

@@ -252,6 +252,78 @@ TEST(RenderOverlay, CaptionAndColourBarAreDrawn) {
   EXPECT_LT(red_y, blue_y);
 }
 
+// The scale bar is as long on screen as its label says (true at the fabric plane in the top
+// view, where the camera's target lies), the axes triad shows x to the right and y up in the
+// top view, and a highlighted element is marked where it is.
+TEST(RenderOverlay, ScaleBarIsTrueToTheFabricAxesPointTheRightWayAndThePickIsMarked) {
+  SyntheticFabric s;
+  s.projectile_z_m = 0.05f;
+  const Frame f = make_synthetic_frame(s);
+  const int w = 640, h = 480;
+  ViewOptions o = fabric_only(ViewPreset::top);
+  const Camera c = render::fitted_camera(f, ViewPreset::top, float(w) / h);
+  const Image plain = render_image(f, c, o, w, h);
+
+  // Scale bar: the longest horizontal run of near-white pixels in the lower left quarter.
+  ViewOptions bar = o;
+  bar.show_scale_bar = true;
+  const Image with_bar = render_image(f, c, bar, w, h);
+  int longest = 0;
+  for (int y = h / 2; y < h; ++y) {
+    int run = 0;
+    for (int x = 0; x < w / 2; ++x) {
+      const auto* p = with_bar.at(x, y);
+      run = (p[0] > 230 && p[1] > 230 && p[2] > 230) ? run + 1 : 0;
+      longest = std::max(longest, run);
+    }
+  }
+  float u0, v0, u1, v1;
+  ASSERT_TRUE(c.project({0, 0, 0}, float(w) / h, &u0, &v0));
+  ASSERT_TRUE(c.project({0.01f, 0, 0}, float(w) / h, &u1, &v1));
+  const double px_per_mm = (u1 - u0) * w / 10.0;
+  const double mm = longest / px_per_mm;
+  // A round length: 1, 2 or 5 x 10^k mm, to the bar's pixel rounding.
+  const double mant = mm / std::pow(10.0, std::floor(std::log10(mm) + 1e-9));
+  EXPECT_TRUE(std::abs(mant - 1) < 0.05 || std::abs(mant - 2) < 0.05 || std::abs(mant - 5) < 0.05)
+      << longest << " px = " << mm << " mm";
+  EXPECT_GT(longest, 40);
+
+  // Axes: in the top view x (red) points right of the triad's centre, y (green) up.
+  ViewOptions axes = o;
+  axes.show_axes = true;
+  const Image with_axes = render_image(f, c, axes, w, h);
+  double rx = 0, ry = 0, gx = 0, gy = 0;
+  int nr = 0, ng = 0;
+  for (int y = h / 2; y < h; ++y)
+    for (int x = 0; x < w / 3; ++x) {
+      const auto* p = with_axes.at(x, y);
+      if (max_channel_diff(p, plain.at(x, y)) < 40) continue;
+      if (p[0] > 180 && p[1] < 130) rx += x, ry += y, ++nr;
+      if (p[1] > 180 && p[0] < 150 && p[2] < 150) gx += x, gy += y, ++ng;
+    }
+  ASSERT_GT(nr, 10);
+  ASSERT_GT(ng, 10);
+  EXPECT_GT(rx / nr, gx / ng + 5);  // the x axis' pixels lie right of the y axis'
+  EXPECT_LT(gy / ng, ry / nr - 5);  // the y axis' above the x axis'
+
+  // The highlighted element: magenta pixels where it projects.
+  const int e = 777;
+  ViewOptions hl = o;
+  hl.highlight_element = e;
+  const Image with_hl = render_image(f, c, hl, w, h);
+  const auto& a = f.node_pos[f.elem_a[e]];
+  const auto& b = f.node_pos[f.elem_b[e]];
+  float um, vm;
+  ASSERT_TRUE(c.project({0.5f * (a[0] + b[0]), 0.5f * (a[1] + b[1]), 0.5f * (a[2] + b[2])}, float(w) / h, &um, &vm));
+  int magenta = 0;
+  for (int y = int(vm * h) - 12; y <= int(vm * h) + 12; ++y)
+    for (int x = int(um * w) - 12; x <= int(um * w) + 12; ++x) {
+      const auto* p = with_hl.at(x, y);
+      magenta += p[0] > 200 && p[2] > 150 && p[1] < 120;
+    }
+  EXPECT_GT(magenta, 20);
+}
+
 TEST(RenderSection, SectionCutRemovesTheNearHalf) {
   SyntheticFabric s;
   s.dent_depth_m = 0.012f;

@@ -51,12 +51,14 @@ inline render::ViewOptions fabric_only(render::ViewPreset view) {
   render::ViewOptions o;
   o.view = view;
   o.show_projectile = o.show_clamps = o.show_caption = o.show_colorbar = false;
+  o.show_scale_bar = o.show_axes = false;
   return o;
 }
 
 // The same view with nothing but the background.
 inline render::ViewOptions background_only(render::ViewOptions o) {
   o.show_fabric = o.show_projectile = o.show_clamps = o.show_caption = o.show_colorbar = false;
+  o.show_scale_bar = o.show_axes = false;
   return o;
 }
 
