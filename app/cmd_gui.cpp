@@ -1,22 +1,29 @@
 // `ravel gui [SCENE] [--set k=v ...]`: the interactive app. GLFW window, Dear ImGui and
 // all GL on this (the main) thread; the simulation on SimWorker's std::thread
 // (app/sim_worker.h). Each UI frame: poll events, sync() the worker's last published
-// step into the UI's own copy under a short lock, lay out the panels, draw the fabric
-// from that copy with render::Renderer into the 3D view, draw ImGui on top, swap.
+// step into the UI's own copy under a short lock, keep it in the timeline, lay out the
+// panels, draw the frame on show (the run's latest, or a kept one while scrubbing) with
+// render::Renderer into the 3D view, draw ImGui on top, swap.
 //
 // For tests and picture export the app can drive itself:
-//   --frames N             quit after N frames (exit 0)
+//   --frames N             quit after N frames (exit 0; non-zero if a scripted action failed)
 //   --screenshot FILE      PNG of the whole window (UI included) at the last frame
 //   --do FRAME:ACTION      at UI frame FRAME do ACTION (repeatable): play, pause, step,
 //                          reset, restart, clear, fast, slow:US_PER_S, set:KEY=VALUE
-//                          (edit a panel value), view:NAME, field:NAME, screenshot:FILE,
-//                          export-results, export-scene (into --export-dir)
+//                          (edit a panel value), view:NAME, field:NAME, colormap:NAME,
+//                          range:LO:HI | range:auto, scrub:T_US, live, pick:ELEMENT_ID,
+//                          pick-crossing:ID, open:PATH, screenshot:FILE, export-results,
+//                          export-scene, export-vtk:DIR, record:DIR (image sequence),
+//                          sweep:KEY=LIST, limit (into --export-dir), demo:NAME, continue,
+//                          compare-exit
 //   --pause-at-us T        pause the run when simulated time reaches T; with --frames the
-//                          app keeps going past frame N until then (for reproducible pictures)
+//                          app keeps going past frame N until then (for reproducible pictures),
+//                          and until scripted exports and studies have finished
 //   --paused               open paused at t = 0
 //   --view / --field       initial camera preset / colour field
-//   --size WxH             window size (default 1600x1000)
+//   --size WxH             window size (default 1600x1000, or 90 % of a smaller screen)
 //   --export-dir DIR       the Export panel's folder (default ./ravel_export)
+//   --budget-mb MB         memory for the kept frames (default 256)
 #include <glad/gl.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -37,10 +44,12 @@
 #include "cli.h"
 #include "commands.h"
 #include "gui_app.h"
+#include "gui_demos.h"
+#include "gui_jobs.h"
+#include "render/render_target.h"
 #include "render/renderer.h"
 #include "results.h"
 #include "sim_worker.h"
-#include "gui_demos.h"
 
 namespace ravel::app {
 
@@ -84,17 +93,40 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
       a.arg = a.action.substr(c2 + 1);
       a.action = a.action.substr(0, c2);
     }
-    static const char* known[] = {"play",           "pause",        "step", "reset",    "restart",     "clear",
-                                  "fast",           "slow",         "set",  "view",     "field",       "screenshot",
-                                  "export-results", "export-scene", "demo", "continue", "compare-exit"};
+    static const char* known[] = {
+        "play",          "pause", "step",       "reset",          "restart",      "clear",      "fast",   "slow",
+        "set",           "view",  "field",      "colormap",       "range",        "scrub",      "live",   "pick",
+        "pick-crossing", "open",  "screenshot", "export-results", "export-scene", "export-vtk", "record", "sweep",
+        "limit",         "demo",  "continue",   "compare-exit",   "wait"};
     if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return a.action == k; }) ==
         std::end(known))
-      throw UsageError("--do: unknown action '" + a.action +
-                       "' (play, pause, step, reset, restart, clear, fast, slow:RATE, set:KEY=VALUE, "
-                       "view:NAME, field:NAME, screenshot:FILE, export-results, export-scene)");
+      throw UsageError(
+          "--do: unknown action '" + a.action +
+          "' (play, pause, step, reset, restart, clear, fast, slow:RATE, set:KEY=VALUE, view:NAME, "
+          "field:NAME, colormap:NAME, range:LO:HI, scrub:T_US, live, pick:ID, pick-crossing:ID, open:PATH, "
+          "screenshot:FILE, export-results, export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST, "
+          "limit, wait, demo:NAME, continue, compare-exit)");
+    // Arguments that can be checked before the window opens.
+    if ((a.action == "scrub" || a.action == "pick" || a.action == "pick-crossing") &&
+        (a.arg.empty() || !std::isfinite(std::strtod(a.arg.c_str(), &end)) || *end))
+      throw UsageError("--do " + a.action + ": expected a number, got '" + a.arg + "'");
+    if ((a.action == "open" || a.action == "export-vtk" || a.action == "record" || a.action == "sweep") &&
+        a.arg.empty())
+      throw UsageError("--do " + a.action + ": needs an argument (" + a.action + ":...)");
+    if (a.action == "colormap" && !render::parse_color_map(a.arg, nullptr))
+      throw UsageError("--do colormap: expected turbo, viridis, inferno or gray, got '" + a.arg + "'");
     script.emplace(frame, a);
   }
   return script;
+}
+
+// A scripted action that fails is reported (the notice and stderr) and the app goes on;
+// the exit code at the end says a scripted action failed.
+void script_failed(GuiApp& app, const std::string& what) {
+  app.notice = what;
+  app.notice_is_error = true;
+  app.script_failed = true;
+  std::fprintf(stderr, "ravel: --do: %s\n", what.c_str());
 }
 
 void apply_script_action(GuiApp& app, const ScriptAction& a) {
@@ -107,9 +139,9 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
     w.step_once(a.arg.empty() ? 1 : std::max(1, std::atoi(a.arg.c_str())));
   else if (a.action == "reset")
     w.reset();
-  else if (a.action == "restart")
-    gui::restart_with_draft(app);
-  else if (a.action == "clear")
+  else if (a.action == "restart") {
+    if (!gui::restart_with_draft(app)) script_failed(app, "restart refused: " + app.scene_error);
+  } else if (a.action == "clear")
     w.clear_past_runs();
   else if (a.action == "fast") {
     app.pacing.max_speed = true;
@@ -119,20 +151,66 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
     if (!a.arg.empty()) app.pacing.sim_us_per_wall_s = std::max(1e-3, std::atof(a.arg.c_str()));
     w.set_pacing(app.pacing);
   } else if (a.action == "set") {
-    gui::set_draft_value(app, a.arg);
+    try {
+      gui::set_draft_value(app, a.arg);
+    } catch (const std::exception& e) {
+      script_failed(app, std::string("set refused, the panels keep their values: ") + e.what());
+    }
   } else if (a.action == "view") {
     if (!render::parse_view_preset(a.arg, &app.view_options.view))
-      throw UsageError("--do view: unknown view '" + a.arg + "'");
+      script_failed(app, "view: unknown view '" + a.arg + "' (oblique, top, back, section)");
     app.camera_needs_fit = true;
   } else if (a.action == "field") {
     if (!render::parse_color_field(a.arg, &app.view_options.field))
-      throw UsageError("--do field: unknown field '" + a.arg + "'");
+      script_failed(app, "field: unknown field '" + a.arg + "' (strain, velocity, sliding)");
+  } else if (a.action == "colormap") {
+    render::parse_color_map(a.arg, &app.view_options.map);
+  } else if (a.action == "range") {
+    float lo = 0, hi = 0;
+    if (a.arg == "auto") {
+      app.range_locked = false;
+      app.view_options.range_min = app.view_options.range_max = 0;
+    } else if (std::sscanf(a.arg.c_str(), "%f:%f", &lo, &hi) == 2 && hi > lo) {
+      app.range_locked = true;
+      app.view_options.range_min = lo;
+      app.view_options.range_max = hi;
+    } else {
+      script_failed(app, "range: expected LO:HI with HI > LO, or auto, got '" + a.arg + "'");
+    }
+  } else if (a.action == "scrub") {
+    if (g_compare && g_compare->active()) {  // compare / demos: every run to the same time
+      g_compare->scrub_to(std::atof(a.arg.c_str()) * 1e-6);
+      std::printf("ravel gui: compare runs shown at t = %.6f us\n", g_compare->scrub_time_s() * 1e6);
+      return;
+    }
+    app.scrub_to(std::atof(a.arg.c_str()) * 1e-6);
+    std::printf("ravel gui: showing t = %.6f us (run at %.6f us)\n", app.shown().time_s * 1e6,
+                app.view.frame.time_s * 1e6);
+  } else if (a.action == "live") {
+    app.go_live();
+    if (g_compare) g_compare->go_live();
+  } else if (a.action == "pick") {
+    gui::pick_element(app, std::atoi(a.arg.c_str()));
+    if (app.notice_is_error) script_failed(app, app.notice);
+  } else if (a.action == "pick-crossing") {
+    gui::pick_crossing(app, std::atoi(a.arg.c_str()));
+    if (app.notice_is_error) script_failed(app, app.notice);
+  } else if (a.action == "open") {
+    if (!gui::open_scene(app, a.arg)) script_failed(app, "open " + a.arg + ": " + app.open_error);
   } else if (a.action == "export-results") {
-    gui::export_results(app);
+    if (!gui::export_results(app)) script_failed(app, app.notice);
   } else if (a.action == "export-scene") {
-    gui::export_scene(app);
+    if (!gui::export_scene(app)) script_failed(app, app.notice);
+  } else if (a.action == "export-vtk") {
+    if (!gui::start_vtk_export(app, a.arg)) script_failed(app, app.notice);
+  } else if (a.action == "record") {
+    if (!gui::start_image_export(app, a.arg)) script_failed(app, app.notice);
+  } else if (a.action == "sweep") {
+    if (!gui::start_scripted_sweep(app, a.arg)) script_failed(app, app.notice);
+  } else if (a.action == "limit") {
+    if (!gui::start_scripted_limit(app)) script_failed(app, app.notice);
   } else if (a.action == "demo") {  // the Demos menu (app/gui_demos.h)
-    if (!g_compare || !g_compare->start_demo(app, a.arg)) throw UsageError("--do demo: " + app.notice);
+    if (!g_compare || !g_compare->start_demo(app, a.arg)) script_failed(app, "demo: " + app.notice);
   } else if (a.action == "continue") {
     if (g_compare) g_compare->resume();
   } else if (a.action == "compare-exit") {
@@ -140,6 +218,8 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
   } else if (a.action == "screenshot") {
     app.screenshot_requested = true;
     app.screenshot_path = a.arg.empty() ? gui::next_screenshot_path(app) : a.arg;
+  } else if (a.action == "wait") {
+    app.script_waiting = true;  // the script holds until the run, exports and studies are idle
   }
 }
 
@@ -209,20 +289,31 @@ void handle_input(GuiApp& app) {
     if (ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left)) app.camera_needs_fit = true;
     if (io.MouseWheel != 0) app.camera.zoom(std::pow(0.88f, io.MouseWheel));
   }
-  // Drags that started in the view keep going even if the mouse leaves it.
+  // Drags that started in the view keep going even if the mouse leaves it. A left click
+  // that does not move (less than 4 px) picks: an element, or a crossing with Ctrl.
   static bool dragging = false;
+  static ImVec2 press_at;
+  static float moved = 0;
   const bool any_down = ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2);
   if (!any_down) dragging = false;
   if (any_down && !dragging && !io.WantCaptureMouse && in_view &&
-      (ImGui::IsMouseClicked(0) || ImGui::IsMouseClicked(1) || ImGui::IsMouseClicked(2)))
+      (ImGui::IsMouseClicked(0) || ImGui::IsMouseClicked(1) || ImGui::IsMouseClicked(2))) {
     dragging = true;
+    press_at = m;
+    moved = 0;
+  }
   if (dragging) {
     const ImVec2 d = io.MouseDelta;
+    moved = std::max(moved, std::hypot(m.x - press_at.x, m.y - press_at.y));
     const bool pan = ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2) || (ImGui::IsMouseDown(0) && io.KeyShift);
     if (pan)
       app.camera.pan(-d.x / std::max(1.0f, app.view_h), d.y / std::max(1.0f, app.view_h));
-    else if (ImGui::IsMouseDown(0))
+    else if (ImGui::IsMouseDown(0) && moved >= 4)
       app.camera.orbit(-d.x * 0.35f, d.y * 0.35f);
+  }
+  if (ImGui::IsMouseReleased(0) && !io.WantCaptureMouse && in_view && moved < 4 && !io.KeyShift) {
+    gui::pick_at(app, m.x, m.y, io.KeyCtrl);
+    moved = 1e9f;
   }
   if (io.WantCaptureKeyboard) return;
   SimWorker& w = *app.worker;
@@ -237,6 +328,20 @@ void handle_input(GuiApp& app) {
     app.screenshot_requested = true;
     app.screenshot_path = gui::next_screenshot_path(app);
   }
+  if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) app.picked = gui::Picked{};
+  // Time travel: , and . step through the kept frames, End goes back to the run.
+  if (!app.timeline.empty()) {
+    const std::size_t cur = app.live ? app.timeline.size() - 1 : app.scrub_index;
+    if (ImGui::IsKeyPressed(GLFW_KEY_COMMA)) app.scrub_to(app.timeline.time(cur > 0 ? cur - 1 : 0));
+    if (ImGui::IsKeyPressed(GLFW_KEY_PERIOD)) {
+      if (cur + 1 >= app.timeline.size())
+        app.go_live();
+      else
+        app.scrub_to(app.timeline.time(cur + 1));
+    }
+  }
+  if (ImGui::IsKeyPressed(GLFW_KEY_END, false)) app.go_live();
+  if (ImGui::IsKeyPressed(GLFW_KEY_O, false) && io.KeyCtrl) app.show_open = true;
   for (int i = 0; i < 4; ++i)
     if (ImGui::IsKeyPressed(GLFW_KEY_1 + i, false)) {
       app.view_options.view = render::ViewPreset(i);
@@ -260,6 +365,10 @@ void draw_help(GuiApp& app) {
                            {"left drag", "orbit"},
                            {"right drag, shift+left drag", "pan"},
                            {"wheel", "zoom"},
+                           {"click, ctrl+click", "pick an element / a crossing (Esc: clear)"},
+                           {", and .", "previous / next kept frame (time slider)"},
+                           {"End", "back to the live run"},
+                           {"Ctrl+O", "open a scene"},
                            {"C", "clear the earlier runs from the charts"},
                            {"P", "screenshot into the export folder"},
                            {"H or F1", "this help"}};
@@ -284,32 +393,27 @@ void draw_help(GuiApp& app) {
 // drags or the run plays, and full quality once everything is still.
 class ViewCache {
  public:
-  ~ViewCache() { release(); }
-
   void release() {
-    if (fbo_) glDeleteFramebuffers(1, &fbo_);
-    if (color_) glDeleteTextures(1, &color_);
-    if (depth_) glDeleteRenderbuffers(1, &depth_);
-    fbo_ = color_ = depth_ = 0;
-    w_ = h_ = 0;
+    target_.release();
+    valid_ = false;
   }
 
   // Redraw if needed; `force_hq` for screenshots. Returns true if it drew.
   bool update(render::Renderer& renderer, const GuiApp& app, int w, int h, float ui_scale, bool busy, bool force_hq) {
     using Clock = std::chrono::steady_clock;
     const auto now = Clock::now();
-    if (w != w_ || h != h_) resize(w, h);
+    if (target_.resize(w, h)) valid_ = false;
     const std::string key = view_key(app);
-    const bool new_frame = app.view.frame_serial != drawn_serial_;
+    const bool new_frame = app.shown_serial() != drawn_serial_;
     const bool view_changed = key != drawn_key_;
     if (busy || new_frame || view_changed) last_change_ = now;
     const bool still = now - last_change_ > std::chrono::milliseconds(250);
     // Budget: at most about a quarter of wall time on the fabric while a run plays.
     const auto min_gap = std::chrono::duration<double, std::milli>(std::max(66.0, 3.0 * last_ms_));
-    bool draw = !valid_ || view_changed || force_hq;
+    bool draw = !valid_ || view_changed || force_hq || (new_frame && !app.live);  // scrubbing: at once
     if (!draw && new_frame && now - last_draw_ >= min_gap) draw = true;
     if (!draw && still && !hq_) draw = true;  // settle to full quality
-    if (!draw || app.view.frame.node_pos.empty()) return false;
+    if (!draw || app.shown().node_pos.empty()) return false;
 
     const bool hq = force_hq || (still && !busy && !new_frame && !view_changed) ||
                     (!busy && app.view.state != WorkerState::running && !new_frame);
@@ -323,13 +427,13 @@ class ViewCache {
     // ...and consecutive elements merge where the result is within half a pixel.
     if (!hq) o.merge_px = 0.5f;
     const auto t0 = Clock::now();
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-    renderer.draw(app.view.frame, app.camera, o, 0, 0, w_, h_);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    target_.bind();
+    renderer.draw(app.shown(), app.camera, o, 0, 0, w, h);
+    render::RenderTarget::bind_window();
     glFinish();  // make the cost visible here, where it is budgeted
     last_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     last_draw_ = Clock::now();
-    drawn_serial_ = app.view.frame_serial;
+    drawn_serial_ = app.shown_serial();
     drawn_key_ = key;
     hq_ = hq;
     valid_ = true;
@@ -337,14 +441,8 @@ class ViewCache {
     return true;
   }
 
-  unsigned texture() const { return color_; }
   // Copy the view into the window's back buffer with its lower-left corner at (x, y).
-  void blit_to_window(int x, int y) const {
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-    glBlitFramebuffer(0, 0, w_, h_, x, y, x + w_, y + h_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  }
+  void blit_to_window(int x, int y) const { target_.blit_to_window(x, y); }
   bool valid() const { return valid_; }
   double last_ms() const { return last_ms_; }
   long draws() const { return draws_; }
@@ -353,39 +451,17 @@ class ViewCache {
   static std::string view_key(const GuiApp& app) {
     const render::Camera& c = app.camera;
     const render::ViewOptions& o = app.view_options;
-    char b[320];
-    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g", c.target[0], c.target[1],
-                  c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view), int(o.field), int(o.map),
-                  o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption, o.show_colorbar,
-                  o.range_min, o.range_max, int(o.yarn_geometry), app.playing_render_scale);
+    char b[400];
+    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g %d %d %g %g %d %d",
+                  c.target[0], c.target[1], c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view),
+                  int(o.field), int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption,
+                  o.show_colorbar, o.range_min, o.range_max, int(o.yarn_geometry), app.playing_render_scale,
+                  o.highlight_element, o.highlight_crossing, o.highlight_mirror[0], o.highlight_mirror[1],
+                  o.show_scale_bar, o.show_axes);
     return b;
   }
 
-  void resize(int w, int h) {
-    release();
-    w_ = w;
-    h_ = h;
-    glGenTextures(1, &color_);
-    glBindTexture(GL_TEXTURE_2D, color_);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glGenRenderbuffers(1, &depth_);
-    glBindRenderbuffer(GL_RENDERBUFFER, depth_);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
-    glGenFramebuffers(1, &fbo_);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color_, 0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glBindTexture(GL_TEXTURE_2D, 0);
-    valid_ = false;
-  }
-
-  GLuint fbo_ = 0, color_ = 0, depth_ = 0;
-  int w_ = 0, h_ = 0;
+  render::RenderTarget target_;
   bool valid_ = false, hq_ = false;
   std::uint64_t drawn_serial_ = ~std::uint64_t(0);
   std::string drawn_key_;
@@ -393,6 +469,60 @@ class ViewCache {
   double last_ms_ = 0;
   long draws_ = 0;
 };
+
+// The main menu bar across the top of the window.
+void draw_menu_bar(GuiApp& app, gui::CompareMode& compare) {
+  if (!ImGui::BeginMainMenuBar()) return;
+  app.menu_h = ImGui::GetWindowSize().y;
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("Open scene...", "Ctrl+O")) app.show_open = true;
+    if (ImGui::MenuItem("Scene keys...", nullptr, app.show_keys)) app.show_keys = !app.show_keys;
+    ImGui::Separator();
+    if (ImGui::MenuItem("Export history.csv + summary.json")) gui::export_results(app);
+    if (ImGui::MenuItem("Export scene TOML")) gui::export_scene(app);
+    if (ImGui::MenuItem("Export VTK series of the kept frames", nullptr, false, !app.timeline.empty()))
+      gui::start_vtk_export(app, app.export_dir + "/vtk");
+    if (ImGui::MenuItem("Export images of the kept frames (+ MP4)", nullptr, false, !app.timeline.empty()))
+      gui::start_image_export(app, app.export_dir + "/images");
+    if (ImGui::MenuItem("Screenshot", "P")) {
+      app.screenshot_requested = true;
+      app.screenshot_path = gui::next_screenshot_path(app);
+    }
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit")) app.quit = true;
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Studies")) {
+    gui::studies_menu_items(app);
+    ImGui::EndMenu();
+  }
+  compare.menu_items(app);
+  if (ImGui::BeginMenu("Help")) {
+    if (ImGui::MenuItem("Keys and mouse", "H")) app.show_help = true;
+    ImGui::EndMenu();
+  }
+  ImGui::EndMainMenuBar();
+}
+
+// The window's first size: --size, else 1600 x 1000 or 90 % of a smaller screen.
+void initial_window_size(bool given, int* w, int* h) {
+  if (given) return;
+  GLFWmonitor* mon = glfwGetPrimaryMonitor();
+  int mx = 0, my = 0, mw = 0, mh = 0;
+  if (mon) glfwGetMonitorWorkarea(mon, &mx, &my, &mw, &mh);
+  if (mw <= 0 || mh <= 0) return;
+  *w = std::max(640, std::min(*w, int(mw * 0.9)));
+  *h = std::max(480, std::min(*h, int(mh * 0.9)));
+}
+
+GuiApp* g_app_for_drop = nullptr;
+void on_drop(GLFWwindow*, int count, const char** paths) {
+  if (g_app_for_drop && count > 0 && paths[0]) {
+    g_app_for_drop->open_path = paths[0];
+    gui::open_scene(*g_app_for_drop, paths[0]);
+    g_app_for_drop->show_open = true;
+  }
+}
 
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> out;
@@ -436,6 +566,14 @@ int cmd_gui(const Args& args) {
           win_h < 480 || win_w > 8192 || win_h > 8192)
         throw UsageError("--size: expected WxH of at least 640x480, got '" + a.flags["size"] + "'");
     }
+    std::size_t budget_mb = 256;
+    if (a.flags.count("budget-mb")) {
+      char* end = nullptr;
+      const long mb = std::strtol(a.flags["budget-mb"].c_str(), &end, 10);
+      if (a.flags["budget-mb"].empty() || *end || mb < 16 || mb > 65536)
+        throw UsageError("--budget-mb: expected a whole number of MB, 16..65536, got '" + a.flags["budget-mb"] + "'");
+      budget_mb = std::size_t(mb);
+    }
     Scene scene = load_scene_from(a);
 
     // No display: say so in one line and point to the headless commands.
@@ -461,6 +599,7 @@ int cmd_gui(const Args& args) {
     glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
     // No multisampling: under a software GL (llvmpipe) it multiplies the fabric's cost.
     glfwWindowHint(GLFW_SAMPLES, 0);
+    initial_window_size(a.flags.count("size") > 0, &win_w, &win_h);
     const std::string title = "ravel \xE2\x80\x94 " + scene.name;
     GLFWwindow* window = glfwCreateWindow(win_w, win_h, title.c_str(), nullptr, nullptr);
     if (!window) {
@@ -484,7 +623,8 @@ int cmd_gui(const Args& args) {
     ImGui::GetIO().IniFilename = nullptr;  // the layout is fixed; no imgui.ini next to the user's files
     float xscale = 1, yscale = 1;
     glfwGetWindowContentScale(window, &xscale, &yscale);
-    const float ui_scale = std::clamp(xscale, 1.0f, 3.0f);
+    // The UI scales with the monitor's content scale (a 4K screen at 200 %: twice the size).
+    const float ui_scale = std::clamp(std::max(xscale, yscale), 1.0f, 3.0f);
     load_font(16.0f * ui_scale);
     setup_style(ui_scale);
     ImGui_ImplGlfw_InitForOpenGL(window, true);
@@ -495,9 +635,15 @@ int cmd_gui(const Args& args) {
       render::Renderer renderer;
       SimWorker worker(scene, has_switch(a, "paused"));
       GuiApp app;
+      app.timeline.set_budget_bytes(budget_mb << 20);
+      app.layout_check = std::getenv("RAVEL_LAYOUT_CHECK") != nullptr;
+      app.ui_scale = ui_scale;
       gui::CompareMode compare;
       g_compare = &compare;
+      g_app_for_drop = &app;
+      glfwSetDropCallback(window, on_drop);
       app.worker = &worker;
+      worker.queue_frames(true);  // the timeline keeps every published frame
       app.draft = scene;
       app.view_options = view_options;
       app.camera = render::Camera::preset(view_options.view);
@@ -515,6 +661,8 @@ int cmd_gui(const Args& args) {
       auto last_frame_end = t0;
       double worst_frame_ms = 0, view_ms_total = 0;
       long frame = 0;
+      int win_w_final = win_w, win_h_final = win_h;
+      long script_frame = 0;    // the --do frame counter (held by `wait`)
       long playing_frames = 0;  // UI frames while the run played, and their wall time
       double playing_s = 0;
       double sim_at_end_us = 0;
@@ -522,8 +670,20 @@ int cmd_gui(const Args& args) {
         const auto frame_start = std::chrono::steady_clock::now();
         glfwPollEvents();
         ++frame;
-        for (auto [it, end] = script.equal_range(frame); it != end; ++it) apply_script_action(app, it->second);
         worker.sync(app.view);
+        gui::update_timeline(app);
+        // Scripted actions run at their script frame; `wait` holds the script frame (not the
+        // UI) until the run is paused or ended and no export or study is running.
+        if (app.script_waiting && app.view.state != WorkerState::running && !gui::export_running(app) &&
+            !gui::studies_running(app) && !worker.busy())
+          app.script_waiting = false;
+        if (!app.script_waiting) {
+          ++script_frame;
+          for (auto [it, end] = script.equal_range(script_frame); it != end && !app.script_waiting; ++it)
+            apply_script_action(app, it->second);
+          worker.sync(app.view);
+          gui::update_timeline(app);
+        }
 
         int fb_w = 0, fb_h = 0, win_w_now = 0, win_h_now = 0;
         glfwGetFramebufferSize(window, &fb_w, &fb_h);
@@ -536,42 +696,63 @@ int cmd_gui(const Args& args) {
         ImGui_ImplGlfw_NewFrame();
         ImGui::NewFrame();
         const ImVec2 ds = ImGui::GetIO().DisplaySize;
-        app.left_w = std::clamp(ds.x * 0.25f, 330.0f * ui_scale, 420.0f * ui_scale);
-        app.bottom_h = std::clamp(ds.y * 0.36f, 250.0f * ui_scale, 400.0f * ui_scale);
-        app.status_w = std::clamp(ds.x * 0.21f, 300.0f * ui_scale, 380.0f * ui_scale);
+        const float fs = ImGui::GetFontSize();
+        draw_menu_bar(app, compare);
+        // Layout: menu bar on top; the left panel (scrolls when it does not fit); the 3D view
+        // with the time slider under it; the charts and the status at the bottom. Sizes follow
+        // the font (and so the monitor's content scale) and the window.
+        app.left_w = std::clamp(ds.x * 0.25f, fs * 21.0f, fs * 27.0f);
+        app.bottom_h = std::clamp(ds.y * 0.34f, fs * 13.0f, fs * 25.0f);
+        app.status_w = std::clamp(ds.x * 0.22f, fs * 18.0f, fs * 24.0f);
+        app.timeline_h =
+            compare.active() ? 0.0f : ImGui::GetFrameHeight() + 2 * ImGui::GetStyle().WindowPadding.y + 2.0f;
         app.view_x = app.left_w;
-        app.view_y = 0;
+        app.view_y = app.menu_h;
         app.view_w = std::max(1.0f, ds.x - app.left_w);
-        app.view_h = std::max(1.0f, ds.y - app.bottom_h);
+        app.view_h = std::max(1.0f, ds.y - app.bottom_h - app.menu_h - app.timeline_h);
         app.fps = ImGui::GetIO().Framerate;
 
         handle_input(app);
         const bool dragging = !ImGui::GetIO().WantCaptureMouse &&
                               (ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2));
+        app.mode_field = compare.active() ? compare.field() : std::string();
         gui::draw_left_panel(app);
         compare.update();
         if (compare.active()) {
           compare.draw_panels(app);  // caption, controls and the runs' velocity chart
         } else {
+          gui::draw_timeline_bar(app);
           gui::draw_charts_panel(app);
           gui::draw_status_panel(app);
+          gui::draw_picked_window(app);
         }
-        compare.draw_menu(app);
+        compare.draw_dialogs(app);
+        gui::draw_keys_window(app);
+        gui::draw_open_window(app);
+        gui::draw_studies_windows(app);
+        gui::draw_export_progress(app);
         draw_help(app);
+        // The picked item is drawn over the fabric in the copy it was picked in.
+        app.view_options.highlight_element = app.picked.element;
+        app.view_options.highlight_crossing = app.picked.crossing;
+        app.view_options.highlight_mirror = app.picked.mirror;
+        // The 3D view's overlay text about as tall as the UI's (stb_easy_font is 7 px high).
+        const float overlay_scale = std::max(1.0f, std::round(fs / 8.0f));
 
         // The 3D view: the renderer draws the UI's copy of the frame into the cached
         // texture (when due), which ImGui then shows behind the panels.
         const float sx = float(fb_w) / float(std::max(1, win_w_now)), sy = float(fb_h) / float(std::max(1, win_h_now));
         const int vw = std::max(1, int(app.view_w * sx)), vh = std::max(1, int(app.view_h * sy));
-        if (app.camera_needs_fit && !app.view.frame.node_pos.empty()) {
-          app.camera = render::fitted_camera(app.view.frame, app.view_options.view, float(vw) / float(vh));
+        if (app.camera_needs_fit && !app.shown().node_pos.empty()) {
+          app.camera = render::fitted_camera(app.shown(), app.view_options.view, float(vw) / float(vh));
           app.camera_needs_fit = false;
         }
         const bool shot_due = app.screenshot_requested || (frames > 0 && frame >= frames && !screenshot.empty());
         const auto v0 = std::chrono::steady_clock::now();
         if (!compare.active())
-          view_cache.update(renderer, app, vw, vh, ui_scale, dragging || app.view.state == WorkerState::running,
-                            shot_due);
+          view_cache.update(renderer, app, vw, vh, overlay_scale,
+                            dragging || (app.live && app.view.state == WorkerState::running), shot_due);
+        gui::step_export(app, renderer, vw, vh);
         view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
         ImGui::Render();
         glViewport(0, 0, fb_w, fb_h);
@@ -582,7 +763,7 @@ int cmd_gui(const Args& args) {
         // panels are drawn over it.
         if (compare.active()) {  // split viewports of the compared runs
           compare.draw_views(renderer, int(app.view_x * sx), fb_h - int((app.view_y + app.view_h) * sy), vw, vh,
-                             ui_scale);
+                             overlay_scale);
         } else if (view_cache.valid()) {
           const int dx = int(app.view_x * sx), dy = fb_h - int((app.view_y + app.view_h) * sy);
           view_cache.blit_to_window(dx, dy);
@@ -597,9 +778,13 @@ int cmd_gui(const Args& args) {
           ++playing_frames;
           playing_s += frame_ms * 1e-3;
         }
+        // With --frames the app ends at frame N, but not before a --pause-at-us time is reached
+        // or a scripted export or study has finished (at most 10 minutes in all).
+        const bool waiting = (pause_at_us > 0 && app.view.state == WorkerState::running) || gui::export_running(app) ||
+                             gui::studies_running(app) || app.script_waiting ||
+                             script.upper_bound(script_frame) != script.end();
         const bool last = frames > 0 && frame >= frames &&
-                          (pause_at_us <= 0 || app.view.state != WorkerState::running ||
-                           std::chrono::steady_clock::now() - t0 > std::chrono::seconds(120));
+                          (!waiting || std::chrono::steady_clock::now() - t0 > std::chrono::seconds(600));
         if (last && !screenshot.empty()) {
           app.screenshot_requested = true;
           app.screenshot_path = screenshot;
@@ -619,6 +804,7 @@ int cmd_gui(const Args& args) {
         glfwSwapBuffers(window);
         if (last) {
           sim_at_end_us = app.view.frame.time_s * 1e6;
+          glfwGetWindowSize(window, &win_w_final, &win_h_final);
           break;
         }
         // At most ~60 UI frames a second: a software GL would otherwise take the core
@@ -646,6 +832,21 @@ int cmd_gui(const Args& args) {
             sim_at_end_us, app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }
+      if (app.layout_check) {
+        // Each problem once (they repeat every frame).
+        std::vector<std::string> seen;
+        for (const auto& p : app.layout_problems)
+          if (std::find(seen.begin(), seen.end(), p) == seen.end()) seen.push_back(p);
+        if (seen.empty()) {
+          std::printf("ravel gui: layout check at %dx%d: every panel fits\n", win_w_final, win_h_final);
+        } else {
+          std::printf("ravel gui: layout check at %dx%d: %zu problems\n", win_w_final, win_h_final, seen.size());
+          for (const auto& p : seen) std::printf("  %s\n", p.c_str());
+          if (exit_code == exit_ok) exit_code = exit_failure;
+        }
+      }
+      if (app.script_failed && exit_code == exit_ok) exit_code = exit_failure;
+      g_app_for_drop = nullptr;
       worker.request_exit();
       view_cache.release();
     }  // worker joined, renderer destroyed with the context current

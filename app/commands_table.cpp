@@ -22,23 +22,27 @@ const CommandOption kJobs{"jobs", "N", false, "runs at a time (default: one per 
 
 std::vector<Command> make_table() {
   std::vector<Command> t;
-  t.push_back({"gui",
-               "ravel [gui] [SCENE] [options]",
-               "the interactive app (the default command when a display exists)",
-               {kSet,
-                kThreads,
-                {"size", "WxH", false, "window size (default: 1600x1000, at least 640x480)"},
-                {"view", "NAME", false, "initial camera: oblique (default), top, back or section"},
-                {"field", "NAME", false, "initial colour field: strain (default), velocity or sliding"},
-                {"paused", nullptr, false, "open paused at t = 0"},
-                {"pause-at-us", "T", false, "pause when the simulated time reaches T us"},
-                {"frames", "N", false, "quit after N UI frames (for scripts and tests)"},
-                {"screenshot", "FILE", false, "PNG of the whole window at the last frame"},
-                {"do", "FRAME:ACTION", true,
-                 "at UI frame FRAME do ACTION (repeatable): play, pause, step, reset, restart, clear, fast, "
-                 "slow:US_PER_S, set:KEY=VALUE, view:NAME, field:NAME, screenshot:FILE, export-results, "
-                 "export-scene, demo:NAME, continue, compare-exit"},
-                {"export-dir", "DIR", false, "the Export panel's folder (default: ./ravel_export)"}}});
+  t.push_back(
+      {"gui",
+       "ravel [gui] [SCENE] [options]",
+       "the interactive app (the default command when a display exists)",
+       {kSet,
+        kThreads,
+        {"size", "WxH", false, "window size (default: 1600x1000, or 90 % of a smaller screen; at least 640x480)"},
+        {"view", "NAME", false, "initial camera: oblique (default), top, back or section"},
+        {"field", "NAME", false, "initial colour field: strain (default), velocity or sliding"},
+        {"paused", nullptr, false, "open paused at t = 0"},
+        {"pause-at-us", "T", false, "pause when the simulated time reaches T us"},
+        {"frames", "N", false, "quit after N UI frames (for scripts and tests)"},
+        {"screenshot", "FILE", false, "PNG of the whole window at the last frame"},
+        {"do", "FRAME:ACTION", true,
+         "at UI frame FRAME do ACTION (repeatable): play, pause, step, reset, restart, clear, fast, "
+         "slow:US_PER_S, set:KEY=VALUE, view:NAME, field:NAME, colormap:NAME, range:LO:HI (or range:auto), "
+         "scrub:T_US, live, pick:ELEMENT_ID, pick-crossing:ID, open:PATH, screenshot:FILE, export-results, "
+         "export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST, limit, demo:NAME, continue, "
+         "compare-exit"},
+        {"budget-mb", "MB", false, "memory for the kept frames of a run (time slider; default 256)"},
+        {"export-dir", "DIR", false, "the Export panel's folder (default: ./ravel_export)"}}});
   t.push_back({"run",
                "ravel run [SCENE] [--set KEY=VALUE ...] --out DIR [options]",
                "one headless run: DIR/summary.json, DIR/history.csv, DIR/scene.toml",

@@ -57,7 +57,7 @@ double nice_step(double range, int target) {
   return (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * mag;
 }
 
-void draw_chart(const ChartSpec& spec, ImVec2 size) {
+double draw_chart(const ChartSpec& spec, ImVec2 size) {
   ImDrawList* dl = ImGui::GetWindowDrawList();
   const ImVec2 origin = ImGui::GetCursorScreenPos();
   ImGui::InvisibleButton(spec.id, size);
@@ -130,7 +130,7 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
   const float left = ImGui::CalcTextSize(widest).x + fs * 0.9f;
   const ImVec2 p0(origin.x + left, y_label_y + fs * 1.5f);
   const ImVec2 p1(origin.x + size.x - fs * 0.8f, origin.y + size.y - fs * 2.6f);
-  if (p1.x - p0.x < 20 || p1.y - p0.y < 20) return;
+  if (p1.x - p0.x < 20 || p1.y - p0.y < 20) return -1;
 
   dl->AddText(ImVec2(origin.x + 2, origin.y), text, spec.title.c_str());
   for (size_t i = 0; i < items.size(); ++i) {
@@ -172,8 +172,17 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
                 y_max);
   if (spec.rows)
     for (const auto& s : spec.series) plot_rows(dl, *spec.rows, s.value, s.color, 2.0f, p0, p1, x_max, y_min, y_max);
+  if (spec.cursor_s >= 0 && spec.cursor_s <= x_max) {
+    const float cx = float(p0.x + spec.cursor_s / x_max * (p1.x - p0.x));
+    dl->AddLine(ImVec2(cx, p0.y), ImVec2(cx, p1.y), IM_COL32(255, 80, 210, 220), 2.0f);
+  }
   dl->PopClipRect();
 
+  double clicked = -1;
+  if (hovered && ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+    const ImVec2 m = ImGui::GetIO().MousePos;
+    if (m.x >= p0.x && m.x <= p1.x) clicked = (m.x - p0.x) / (p1.x - p0.x) * x_max;
+  }
   // Hover read-out: the values of the current run at the time under the mouse.
   if (hovered && spec.rows && !spec.rows->empty()) {
     const ImVec2 m = ImGui::GetIO().MousePos;
@@ -195,10 +204,12 @@ void draw_chart(const ChartSpec& spec, ImVec2 size) {
             ImGui::TextDisabled("%s %.4g", spec.series.size() == 1 ? "" : spec.series[0].label.c_str(),
                                 spec.series[0].value(*q));
           }
+        ImGui::TextDisabled("click: show the fabric at this time");
         ImGui::EndTooltip();
       }
     }
   }
+  return clicked;
 }
 
 }  // namespace ravel::app::gui

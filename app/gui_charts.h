@@ -36,10 +36,12 @@ struct ChartSpec {
   std::vector<ChartSeries> series;
   const std::vector<HistoryRow>* rows = nullptr;  // the current run
   std::vector<ChartOverlay> overlays;
+  double cursor_s = -1;  // a vertical line at this time (the time on show when scrubbing); < 0: none
 };
 
-// Draw the chart into a region of `size` at the cursor.
-void draw_chart(const ChartSpec& spec, ImVec2 size);
+// Draw the chart into a region of `size` at the cursor. Returns the time (s) under a mouse
+// click in the plot (the app scrubs there), or -1.
+double draw_chart(const ChartSpec& spec, ImVec2 size);
 
 // A "nice" tick step (1, 2 or 5 x 10^n) giving about `target` ticks over `range`.
 double nice_step(double range, int target);

@@ -14,6 +14,7 @@
 #include "demo_render.h"
 #include "gui_app.h"
 #include "render/annotate.h"
+#include "render/render_target.h"
 #include "render/renderer.h"
 
 namespace ravel::app::gui {
@@ -30,45 +31,25 @@ bool run_done(const WorkerView& v) {
 
 }  // namespace
 
-// The split views, drawn into a texture when the runs publish new frames (at most every
-// 120 ms while playing), copied into the window every UI frame.
+// The split views, drawn into a render target when the runs publish new frames (at most
+// every 120 ms while playing), copied into the window every UI frame.
 struct CompareMode::Cache {
-  GLuint fbo = 0, color = 0, depth = 0;
-  int w = 0, h = 0;
+  render::RenderTarget target;
   std::vector<std::uint64_t> serials;
   std::vector<render::Camera> cameras;
   double last_draw = 0;
   bool valid = false;
   std::unique_ptr<render::Annotator> annotator;
 
-  ~Cache() { release(); }
   void release() {
-    if (fbo) glDeleteFramebuffers(1, &fbo);
-    if (color) glDeleteTextures(1, &color);
-    if (depth) glDeleteRenderbuffers(1, &depth);
-    fbo = color = depth = 0;
-    w = h = 0;
+    target.release();
     valid = false;
   }
   void resize(int nw, int nh) {
-    release();
-    w = nw;
-    h = nh;
-    glGenTextures(1, &color);
-    glBindTexture(GL_TEXTURE_2D, color);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glGenRenderbuffers(1, &depth);
-    glBindRenderbuffer(GL_RENDERBUFFER, depth);
-    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH24_STENCIL8, w, h);
-    glGenFramebuffers(1, &fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color, 0);
-    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glBindTexture(GL_TEXTURE_2D, 0);
-    cameras.clear();
+    if (target.resize(nw, nh)) {
+      valid = false;
+      cameras.clear();
+    }
   }
 };
 
@@ -82,6 +63,7 @@ void CompareMode::start(GuiApp& app, const demos::Demo& demo, const std::vector<
   app.worker->pause();  // the single run waits behind the comparison
   for (const Scene& s : scenes) {
     workers_.push_back(std::make_unique<SimWorker>(s, /*start_paused=*/true));
+    workers_.back()->queue_frames(true);  // every run keeps its frames for the shared slider
     workers_.back()->set_pacing(Pacing{true, 0});
     workers_.back()->pause_at(0);
     views_.emplace_back();
@@ -96,6 +78,12 @@ void CompareMode::start(GuiApp& app, const demos::Demo& demo, const std::vector<
   for (std::size_t i = 0; i < demo.runs.size(); ++i) caption_[1] += (i ? ", " : "") + demo.runs[i].label;
   cache_->cameras.clear();
   cache_->serials.assign(scenes.size(), ~std::uint64_t(0));
+  // Each run keeps its frames for the shared time slider (the budget shared between them).
+  timelines_.assign(scenes.size(), Timeline((std::size_t(256) << 20) / std::max<std::size_t>(1, scenes.size())));
+  for (std::size_t i = 0; i < timelines_.size(); ++i) timelines_[i].reset(long(i));
+  kept_serial_.assign(scenes.size(), 0);
+  scrubbing_ = false;
+  scrub_frames_.assign(scenes.size(), Frame{});
   app.notice = "started " + demo.title;
   app.notice_is_error = false;
 }
@@ -169,9 +157,26 @@ double CompareMode::next_stop_s() const {
   return -1;
 }
 
+void CompareMode::scrub_to(double t_s) {
+  if (!active()) return;
+  scrubbing_ = true;
+  scrub_t_ = t_s;
+  for (std::size_t i = 0; i < timelines_.size(); ++i)
+    if (!timelines_[i].empty()) scrub_frames_[i] = timelines_[i].frame(timelines_[i].index_at(t_s));
+  ++scrub_serial_;
+}
+
 void CompareMode::update() {
   if (!active()) return;
-  for (std::size_t i = 0; i < workers_.size(); ++i) workers_[i]->sync(views_[i]);
+  for (std::size_t i = 0; i < workers_.size(); ++i) {
+    workers_[i]->sync(views_[i]);
+    for (const auto& [f, step] : views_[i].new_frames) timelines_[i].add(f, step);
+    views_[i].new_frames.clear();
+    if (views_[i].frame_serial != kept_serial_[i] && !views_[i].frame.node_pos.empty()) {
+      timelines_[i].add(views_[i].frame, views_[i].step_count);
+      kept_serial_[i] = views_[i].frame_serial;
+    }
+  }
   std::vector<double> times;
   double max_dt = 0;
   bool all_done = true;
@@ -216,31 +221,22 @@ void CompareMode::update() {
   }
 }
 
-void CompareMode::draw_menu(GuiApp& app) {
-  // Top centre of the 3D view: the corners hold the renderer's caption and colour bar.
-  ImGui::SetNextWindowPos(ImVec2(app.view_x + 0.5f * app.view_w, app.view_y + 4), ImGuiCond_Always, ImVec2(0.5f, 0.0f));
-  ImGui::SetNextWindowBgAlpha(0.85f);
-  if (ImGui::Begin("##demos_menu", nullptr,
-                   ImGuiWindowFlags_MenuBar | ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize |
-                       ImGuiWindowFlags_NoMove | ImGuiWindowFlags_AlwaysAutoResize |
-                       ImGuiWindowFlags_NoSavedSettings)) {
-    if (ImGui::BeginMenuBar()) {
-      if (ImGui::BeginMenu("Demos")) {
-        for (const demos::Demo& d : demos::catalogue()) {
-          if (ImGui::MenuItem(d.title.c_str())) start_demo(app, d.name);
-          if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", d.summary.c_str());
-        }
-        ImGui::EndMenu();
-      }
-      if (ImGui::BeginMenu("Compare")) {
-        if (ImGui::MenuItem("Compare runs...")) show_compare_dialog_ = true;
-        if (ImGui::MenuItem("Back to the single run", nullptr, false, active())) stop(app);
-        ImGui::EndMenu();
-      }
-      ImGui::EndMenuBar();
+void CompareMode::menu_items(GuiApp& app) {
+  if (ImGui::BeginMenu("Demos")) {
+    for (const demos::Demo& d : demos::catalogue()) {
+      if (ImGui::MenuItem(d.title.c_str())) start_demo(app, d.name);
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", d.summary.c_str());
     }
+    ImGui::EndMenu();
   }
-  ImGui::End();
+  if (ImGui::BeginMenu("Compare")) {
+    if (ImGui::MenuItem("Compare runs...")) show_compare_dialog_ = true;
+    if (ImGui::MenuItem("Back to the single run", nullptr, false, active())) stop(app);
+    ImGui::EndMenu();
+  }
+}
+
+void CompareMode::draw_dialogs(GuiApp& app) {
   if (!show_compare_dialog_) return;
   ImGui::SetNextWindowPos(ImVec2(app.view_x + app.view_w * 0.5f, app.view_y + app.view_h * 0.4f), ImGuiCond_Appearing,
                           ImVec2(0.5f, 0.5f));
@@ -300,6 +296,14 @@ void CompareMode::draw_panels(GuiApp& app) {
     ImGui::End();
     return;
   }
+  // The shared time slider: every run shown at the same kept time.
+  ImGui::SameLine();
+  if (ImGui::Button(scrubbing_ ? "Live" : "(live)")) go_live();
+  ImGui::SameLine();
+  float t_us = float((scrubbing_ ? scrub_t_ : clock_.time()) * 1e6);
+  ImGui::SetNextItemWidth(std::max(120.0f, ImGui::GetContentRegionAvail().x));
+  if (ImGui::SliderFloat("##compare_time", &t_us, 0.0f, float(std::max(1e-3, clock_.time() * 1e6)), "t = %.2f us"))
+    scrub_to(double(t_us) * 1e-6);
   std::vector<demos::RunState> runs;
   for (std::size_t i = 0; i < views_.size(); ++i)
     runs.push_back({demo_.runs[i].label, views_[i].frame, views_[i].summary, views_[i].history});
@@ -312,7 +316,8 @@ void CompareMode::draw_panels(GuiApp& app) {
 void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale) {
   if (!active() || w <= 0 || h <= 0) return;
   Cache& c = *cache_;
-  if (c.w != w || c.h != h) c.resize(w, h);
+  c.resize(w, h);
+  if (c.serials.size() != views_.size()) c.serials.assign(views_.size(), ~std::uint64_t(0));
   if (!c.annotator) c.annotator = std::make_unique<render::Annotator>();
   const int n = int(views_.size());
   const int cols = n == 4 ? 2 : n, rows = n == 4 ? 2 : 1;
@@ -322,13 +327,15 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
   o.ui_scale = ui_scale;
   o.yarn_geometry = render::YarnGeometry::ribbons;
   bool changed = !c.valid;
-  for (int i = 0; i < n; ++i) changed = changed || views_[i].frame_serial != c.serials[i];
+  // A run's serial: its worker's frame, or the scrubbed frame while the slider holds them.
+  auto serial = [&](int i) { return scrubbing_ ? (std::uint64_t(1) << 62) + scrub_serial_ : views_[i].frame_serial; };
+  for (int i = 0; i < n; ++i) changed = changed || serial(i) != c.serials[i];
   const double now = wall_now();
-  if (changed && (now - c.last_draw > 0.12 || at_key_ || !c.valid)) {
+  if (changed && (now - c.last_draw > 0.12 || at_key_ || scrubbing_ || !c.valid)) {
     bool have_all = true;
-    for (const WorkerView& v : views_) have_all = have_all && !v.frame.node_pos.empty();
+    for (int i = 0; i < n; ++i) have_all = have_all && !shown(std::size_t(i)).node_pos.empty();
     if (have_all) {
-      glBindFramebuffer(GL_FRAMEBUFFER, c.fbo);
+      c.target.bind();
       glViewport(0, 0, w, h);
       glClearColor(0.08f, 0.09f, 0.12f, 1);
       glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
@@ -338,16 +345,16 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
         const int vy_top = ry * h / rows, vh = (ry + 1) * h / rows - vy_top - (rows > 1 ? 3 : 0);
         const int gl_y = h - vy_top - vh;
         if (int(c.cameras.size()) <= i) {
-          render::Camera cam = render::fitted_camera(views_[i].frame, o.view, float(vw) / float(std::max(1, vh)));
+          render::Camera cam = render::fitted_camera(shown(std::size_t(i)), o.view, float(vw) / float(std::max(1, vh)));
           if (n > 1 && o.view != render::ViewPreset::top) cam.zoom(0.72f);
           c.cameras.push_back(cam);
         }
         render::ViewOptions oi = o;
         oi.show_colorbar = i + 1 == n;
-        renderer.draw(views_[i].frame, c.cameras[i], oi, vx, gl_y, vw, vh);
+        renderer.draw(shown(std::size_t(i)), c.cameras[i], oi, vx, gl_y, vw, vh);
         std::vector<render::WorldPolyline> lines;
         if (demo_.overlay == demos::Overlay::wave_fronts)
-          lines = demos::wave_front_lines(views_[i].scene, views_[i].frame, views_[i].frame.time_s);
+          lines = demos::wave_front_lines(views_[i].scene, shown(std::size_t(i)), shown(std::size_t(i)).time_s);
         render::TextBlock title;
         title.x = 10;
         title.y = -10;
@@ -355,18 +362,14 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
         title.colors = {render::Vec3{1.0f, 0.75f, 0.35f}};
         title.scale = ui_scale + 1;
         c.annotator->draw(c.cameras[i], lines, {title}, vx, gl_y, vw, vh);
-        c.serials[i] = views_[i].frame_serial;
+        c.serials[i] = serial(i);
       }
-      glBindFramebuffer(GL_FRAMEBUFFER, 0);
+      render::RenderTarget::bind_window();
       c.valid = true;
       c.last_draw = now;
     }
   }
-  if (!c.valid) return;
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, c.fbo);
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, 0);
-  glBlitFramebuffer(0, 0, w, h, x, y, x + w, y + h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (c.valid) c.target.blit_to_window(x, y);
 }
 
 }  // namespace ravel::app::gui

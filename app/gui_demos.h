@@ -16,6 +16,7 @@
 
 #include "demos.h"
 #include "sim_worker.h"
+#include "timeline.h"
 
 namespace ravel::render {
 class Renderer;
@@ -31,9 +32,11 @@ class CompareMode {
   ~CompareMode();
   bool active() const { return !workers_.empty(); }
 
-  // A small window with a menu bar at the top-left of the 3D view: Demos (the catalogue)
-  // and Compare runs (2-4 runs of the current scene with overrides).
-  void draw_menu(GuiApp& app);
+  // The Demos (the catalogue) and Compare (2-4 runs of the current scene with overrides)
+  // menus of the app's menu bar; call between BeginMainMenuBar and EndMainMenuBar.
+  void menu_items(GuiApp& app);
+  // The Compare runs dialog, when open.
+  void draw_dialogs(GuiApp& app);
   // Start a demo by name (false if there is none / its scene is bad; app.notice says why).
   bool start_demo(GuiApp& app, const std::string& name);
   // Start a comparison of the app's current (draft) scene with per-run overrides.
@@ -52,7 +55,16 @@ class CompareMode {
   // coordinates, y up) from a cached texture, redrawn when the runs publish new frames.
   void draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale);
 
+  // Time travel in step: every run keeps its frames (a Timeline each), and the slider in
+  // the compare panel (or scrub_to) shows all runs at the same earlier time.
+  void scrub_to(double t_s);
+  void go_live() { scrubbing_ = false; }
+  bool scrubbing() const { return scrubbing_; }
+  double scrub_time_s() const { return scrub_t_; }
+  const Frame& shown(std::size_t i) const { return scrubbing_ ? scrub_frames_[i] : views_[i].frame; }
+
   double clock_s() const { return clock_.time(); }
+  const std::string& field() const { return demo_.field; }
   int key_index() const { return key_; }
   bool at_key() const { return at_key_; }
   const std::vector<WorkerView>& views() const { return views_; }
@@ -71,6 +83,12 @@ class CompareMode {
   bool playing_ = true;
   double last_wall_ = -1;
   std::vector<std::string> caption_;
+  std::vector<Timeline> timelines_;
+  std::vector<std::uint64_t> kept_serial_;
+  bool scrubbing_ = false;
+  double scrub_t_ = 0;
+  std::vector<Frame> scrub_frames_;
+  std::uint64_t scrub_serial_ = 0;
   std::unique_ptr<Cache> cache_;
   // Compare dialog state.
   bool show_compare_dialog_ = false;

@@ -1,10 +1,12 @@
 // The app's panels: run controls, scene editor, view, export, charts, status.
 #include <imgui.h>
+#include <imgui_internal.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
 
 #include "gui_app.h"
 #include "gui_charts.h"
@@ -68,9 +70,15 @@ std::string run_key(Scene s) {
   return scene_to_toml(s);
 }
 
-void set_notice(GuiApp& app, const std::string& text, bool error) {
-  app.notice = text;
-  app.notice_is_error = error;
+// The layout check (RAVEL_LAYOUT_CHECK) opens every section, so every control is laid out.
+bool g_force_open = false;
+bool header(const char* label, ImGuiTreeNodeFlags flags = 0) {
+  if (g_force_open) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+  return ImGui::CollapsingHeader(label, flags);
+}
+bool tree_node(const char* label) {
+  if (g_force_open) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+  return ImGui::TreeNode(label);
 }
 
 bool accent_button(const char* label, bool accent, ImVec2 size = ImVec2(0, 0)) {
@@ -84,30 +92,45 @@ bool accent_button(const char* label, bool accent, ImVec2 size = ImVec2(0, 0)) {
   return pressed;
 }
 
+// The label with its key hint if it fits the width, else without it.
+std::string fit_label(const char* text, const char* hint, float width) {
+  const std::string with = std::string(text) + "  " + hint;
+  const float pad = 2 * ImGui::GetStyle().FramePadding.x;
+  return ImGui::CalcTextSize(with.c_str()).x + pad <= width ? with : std::string(text);
+}
+
 void run_controls(GuiApp& app) {
   SimWorker& w = *app.worker;
   const float fs = ImGui::GetFontSize();
   const float full = ImGui::GetContentRegionAvail().x;
   const float third = (full - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
-  const bool finished = app.view.state == WorkerState::finished || app.view.state == WorkerState::diverged;
-  if (w.paused()) {
-    ImGui::BeginDisabled(finished);
-    if (accent_button("Play  [Space]", true, ImVec2(third, 0))) w.play();
+  // The buttons say what the run is doing: a finished or diverged run can only be reset or
+  // restarted (Play and Step are disabled, neither highlighted).
+  const bool ended = app.view.state == WorkerState::finished || app.view.state == WorkerState::diverged;
+  if (ended) {
+    ImGui::BeginDisabled();
+    ImGui::Button(fit_label("Play", "[Space]", third).c_str(), ImVec2(third, 0));
     ImGui::EndDisabled();
-  } else if (ImGui::Button("Pause  [Space]", ImVec2(third, 0))) {
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip(app.view.state == WorkerState::diverged ? "The run diverged: Reset, or Restart with new values"
+                                                                : "The run has ended: Reset or Restart");
+  } else if (app.view.state != WorkerState::running) {
+    if (accent_button(fit_label("Play", "[Space]", third).c_str(), true, ImVec2(third, 0))) w.play();
+  } else if (ImGui::Button(fit_label("Pause", "[Space]", third).c_str(), ImVec2(third, 0))) {
     w.pause();
   }
   ImGui::SameLine();
-  ImGui::BeginDisabled(finished);
-  if (ImGui::Button("Step  [S]", ImVec2(third, 0))) w.step_once(1);
+  ImGui::BeginDisabled(ended);
+  if (ImGui::Button(fit_label("Step", "[S]", third).c_str(), ImVec2(third, 0))) w.step_once(1);
   ImGui::EndDisabled();
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Pause and advance one time step");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Pause and advance one time step [S]");
   ImGui::SameLine();
-  if (ImGui::Button("Reset  [R]", ImVec2(third, 0))) w.reset();
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Back to t = 0 with the scene that is running");
+  if (ImGui::Button(fit_label("Reset", "[R]", third).c_str(), ImVec2(third, 0))) w.reset();
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("Back to t = 0 with the scene that is running [R]");
 
   const bool dirty = run_key(app.draft) != run_key(app.view.scene);
-  if (accent_button(dirty ? "Restart with new values  [Enter]" : "Restart  [Enter]", dirty, ImVec2(full, 0)))
+  if (accent_button(fit_label(dirty ? "Restart with new values" : "Restart", "[Enter]", full).c_str(), dirty,
+                    ImVec2(full, 0)))
     restart_with_draft(app);
   if (dirty) ImGui::TextColored(kAccent, "Edited values are not running yet.");
   ImGui::Checkbox("Restart on every change", &app.auto_restart);
@@ -127,11 +150,11 @@ void run_controls(GuiApp& app) {
     pacing_changed = true;
   }
   ImGui::BeginDisabled(app.pacing.max_speed);
-  ImGui::SetNextItemWidth(full - fs * 7.2f);
+  ImGui::SetNextItemWidth(std::max(fs * 5, full - ImGui::CalcTextSize("\xC2\xB5s per second").x - fs));
   pacing_changed |= slider_si("\xC2\xB5s per second", &app.pacing.sim_us_per_wall_s, 1.0, 0.05, 50.0, "%.2f", true);
   ImGui::EndDisabled();
   if (pacing_changed) w.set_pacing(app.pacing);
-  ImGui::SetNextItemWidth(full - fs * 7.2f);
+  ImGui::SetNextItemWidth(std::max(fs * 5, full - ImGui::CalcTextSize("pause at \xC2\xB5s (?)").x - fs));
   double pause_at = app.pause_at_us;
   if (ImGui::InputDouble("pause at \xC2\xB5s", &pause_at, 0, 0, pause_at < 0 ? "off" : "%.2f",
                          ImGuiInputTextFlags_EnterReturnsTrue)) {
@@ -167,24 +190,55 @@ bool scene_section(GuiApp& app) {
   help_marker(
       "Fabric size. Larger fabrics have more nodes and step more slowly "
       "(the default 120 x 120 mm is about 10,000 nodes in a quarter model).");
-  ImGui::TextUnformatted("clamped");
-  ImGui::SameLine();
-  changed |= ImGui::Checkbox("left", &s.fabric.clamped.left);
-  ImGui::SameLine();
-  changed |= ImGui::Checkbox("right", &s.fabric.clamped.right);
-  ImGui::SameLine();
-  changed |= ImGui::Checkbox("bottom", &s.fabric.clamped.bottom);
-  ImGui::SameLine();
-  changed |= ImGui::Checkbox("top", &s.fabric.clamped.top);
+  // Clamped edges as a 2 x 2 grid, so they fit a narrow panel.
+  ImGui::TextUnformatted("clamped edges");
   help_marker(
       "left / right: x = -W/2, +W/2 (they hold the weft yarns); bottom / top: y = -L/2, +L/2 (the warp yarns).");
+  if (ImGui::BeginTable("clamps", 2)) {
+    ImGui::TableNextColumn();
+    changed |= ImGui::Checkbox("left", &s.fabric.clamped.left);
+    ImGui::TableNextColumn();
+    changed |= ImGui::Checkbox("right", &s.fabric.clamped.right);
+    ImGui::TableNextColumn();
+    changed |= ImGui::Checkbox("bottom", &s.fabric.clamped.bottom);
+    ImGui::TableNextColumn();
+    changed |= ImGui::Checkbox("top", &s.fabric.clamped.top);
+    ImGui::EndTable();
+  }
   changed |= slider_si("failure strain (%)", &s.yarn.failure_strain, 100, 1.0, 10.0, "%.2f");
   int mat = s.yarn.material == Material::zener ? 0 : 1;
   if (ImGui::Combo("material", &mat, "Zener (viscoelastic)\0linear elastic\0")) {
     s.yarn.material = mat == 0 ? Material::zener : Material::elastic;
     changed = true;
   }
-  if (s.yarn.material == Material::zener && ImGui::TreeNode("Zener constants")) {
+  if (tree_node("Weave and crossings")) {
+    changed |= input_si("L0 (mm)", &s.fabric.spacing_m, 1e3, "%.4g");
+    help_marker("L0: horizontal node spacing, the yarn pitch (fabric.spacing_mm). Enter to apply.");
+    changed |= input_si("L1 (mm)", &s.fabric.crossing_gap_m, 1e3, "%.4g");
+    help_marker(
+        "L1: vertical distance of the two nodes at a crossing, the crimp (fabric.crossing_gap_mm). Enter to apply.");
+    changed |= input_si("thickness (mm)", &s.fabric.thickness_m, 1e3, "%.4g");
+    help_marker("Fabric thickness; the yarn contact diameter D is half of it. Enter to apply.");
+    changed |= input_si("node mass (g)", &s.fabric.node_mass_kg, 1e3, "%.4g");
+    help_marker("Lumped mass of a yarn node (paper: 9.4e-5 g). Enter to apply.");
+    changed |= ImGui::SliderInt("yarns/elem.", &s.fabric.yarns_per_element, 1, 8);
+    help_marker("Lump k real yarns into one modelled yarn: a coarser, faster mesh that keeps the crimp angle.");
+    int comp = s.fabric.crossing_compression == CrossingCompression::hyperbolic ? 0 : 1;
+    if (ImGui::Combo("crossings", &comp, "flatten under load\0rigid (paper literally)\0")) {
+      s.fabric.crossing_compression = comp == 0 ? CrossingCompression::hyperbolic : CrossingCompression::rigid;
+      changed = true;
+    }
+    ImGui::BeginDisabled(s.fabric.crossing_compression != CrossingCompression::hyperbolic);
+    changed |= slider_si("c_min (mm)", &s.fabric.flattened_gap_m, 1e3, 0.05, 0.2, "%.3f");
+    help_marker(
+        "c_min: centre distance of two fully flattened yarns (fabric.flattened_gap_mm, docs/MODEL.md section 4).");
+    changed |= slider_si("F_half (N)", &s.fabric.compression_force_n, 1, 0.05, 20, "%.2f", true);
+    help_marker(
+        "F_half: normal force that closes half of D - c_min (fabric.compression_force_n, docs/MODEL.md section 4).");
+    ImGui::EndDisabled();
+    ImGui::TreePop();
+  }
+  if (s.yarn.material == Material::zener && tree_node("Zener constants")) {
     changed |= input_si("K1 (GPa)", &s.yarn.k1_pa, 1e-9, "%.2f");
     help_marker("Zener spring in series: the instantaneous modulus (Eq 23). Enter to apply.");
     changed |= input_si("K2 (GPa)", &s.yarn.k2_pa, 1e-9, "%.2f");
@@ -212,6 +266,19 @@ bool projectile_section(GuiApp& app) {
   ImGui::TextDisabled("impact energy %.1f J", 0.5 * p.mass_kg * p.velocity_mps * p.velocity_mps);
   changed |= slider_si("friction mu_p", &p.friction, 1, 0, 1, "%.2f");
   help_marker("Projectile-yarn Coulomb friction (Eq 20-22). The paper uses 0.27.");
+  if (tree_node("Strike point and obliquity")) {
+    changed |= slider_si("offset x (mm)", &p.offset_x_m, 1e3, -30, 30, "%.2f");
+    changed |= slider_si("offset y (mm)", &p.offset_y_m, 1e3, -30, 30, "%.2f");
+    help_marker(
+        "Strike point from the fabric centre. Off-centre strikes need a half or the full model (4x the nodes); "
+        "0.422 mm (half a yarn spacing) puts the strike between yarns.");
+    changed |= slider_si("obliquity (deg)", &p.obliquity_deg, 1, 0, 80, "%.0f");
+    ImGui::BeginDisabled(p.shape == ShapeKind::sphere);
+    changed |= slider_si("length (mm)", &p.length_m, 1e3, 1, 40, "%.1f");
+    help_marker("Cylinder length / cone height.");
+    ImGui::EndDisabled();
+    ImGui::TreePop();
+  }
   return changed;
 }
 
@@ -244,7 +311,7 @@ bool solver_section(GuiApp& app) {
   help_marker(
       "alpha of Eq 4: dt = alpha L / c. Above about 1 the explicit scheme is unstable "
       "and the run will diverge (it pauses and says so).");
-  changed |= ImGui::SliderInt("contact iterations", &s.contact_iterations, 1, 10);
+  changed |= ImGui::SliderInt("iterations N", &s.contact_iterations, 1, 10);
   help_marker("N passes of the yarn contact correction per step (Eq 16-17).");
   int sym = s.symmetry == SymmetryMode::automatic ? 0 : 1;
   if (ImGui::Combo("symmetry", &sym, "auto (smallest model)\0full fabric\0")) {
@@ -265,38 +332,91 @@ bool solver_section(GuiApp& app) {
   return changed;
 }
 
+// Checkboxes two to a row, so they fit a narrow panel.
+void checkbox_grid(const char* id, std::initializer_list<std::pair<const char*, bool*>> boxes) {
+  if (!ImGui::BeginTable(id, 2)) return;
+  for (const auto& [label, value] : boxes) {
+    ImGui::TableNextColumn();
+    ImGui::Checkbox(label, value);
+  }
+  ImGui::EndTable();
+}
+
+// Radio buttons that wrap onto the next line when the panel is narrow.
+template <class E>
+void radio_row(const char* const* labels, int n, E* value) {
+  const float right = ImGui::GetCursorScreenPos().x + ImGui::GetContentRegionAvail().x;
+  for (int i = 0; i < n; ++i) {
+    const float w = ImGui::GetFrameHeight() + ImGui::GetStyle().ItemInnerSpacing.x + ImGui::CalcTextSize(labels[i]).x;
+    if (i > 0) {
+      ImGui::SameLine();
+      if (ImGui::GetCursorScreenPos().x + w > right) ImGui::NewLine();
+    }
+    if (ImGui::RadioButton(labels[i], int(*value) == i)) *value = E(i);
+  }
+}
+
 void view_section(GuiApp& app) {
   render::ViewOptions& o = app.view_options;
   const char* names[] = {"Oblique", "Top", "Back", "Section"};
+  const float full = ImGui::GetContentRegionAvail().x;
+  const float quarter = (full - 3 * ImGui::GetStyle().ItemSpacing.x) / 4;
   for (int i = 0; i < 4; ++i) {
     if (i) ImGui::SameLine();
-    char label[32];
-    std::snprintf(label, sizeof label, "%s [%d]", names[i], i + 1);
-    if (accent_button(label, int(o.view) == i)) {
+    if (accent_button(names[i], int(o.view) == i, ImVec2(quarter, 0))) {
       o.view = render::ViewPreset(i);
       app.camera_needs_fit = true;
     }
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s view [%d]", names[i], i + 1);
   }
   if (ImGui::Button("Fit [F]")) app.camera_needs_fit = true;
   ImGui::SameLine();
-  ImGui::TextDisabled("drag: orbit, right-drag: pan, wheel: zoom");
-  int field = int(o.field);
-  ImGui::TextUnformatted("colour");
+  ImGui::PushTextWrapPos(0);
+  ImGui::TextDisabled("drag: orbit, right-drag: pan, wheel: zoom, click: pick");
+  ImGui::PopTextWrapPos();
+  if (!app.mode_field.empty()) {
+    // Compare and demos draw their runs with the field the demo chose.
+    ImGui::TextDisabled("colour: %s (set by the demo)", app.mode_field.c_str());
+  } else {
+    ImGui::TextUnformatted("colour");
+    ImGui::SameLine();
+    const char* fields[] = {"strain", "speed", "sliding"};
+    radio_row(fields, 3, &o.field);
+  }
+  // Colour map and range: the range follows the field (strain: 0-1 of the failure strain,
+  // speed: 0 to the impact velocity, sliding: 0 to the frame's maximum) unless locked.
+  int map = int(o.map);
+  ImGui::SetNextItemWidth(ImGui::GetFontSize() * 7);
+  if (ImGui::Combo("map", &map, "turbo\0viridis\0inferno\0gray\0")) o.map = render::ColorMap(map);
   ImGui::SameLine();
-  if (ImGui::RadioButton("strain", field == 0)) o.field = render::ColorField::strain;
-  ImGui::SameLine();
-  if (ImGui::RadioButton("speed", field == 1)) o.field = render::ColorField::velocity;
-  ImGui::SameLine();
-  if (ImGui::RadioButton("sliding", field == 2)) o.field = render::ColorField::sliding;
-  ImGui::Checkbox("whole fabric", &o.mirror);
-  help_marker("Mirror the modelled quarter / half to show the whole fabric.");
-  ImGui::SameLine();
-  ImGui::Checkbox("projectile", &o.show_projectile);
-  ImGui::SameLine();
-  ImGui::Checkbox("clamps", &o.show_clamps);
-  ImGui::Checkbox("section cut", &o.section_cut);
-  ImGui::SameLine();
-  ImGui::Checkbox("caption", &o.show_caption);
+  if (ImGui::Checkbox("lock range", &app.range_locked)) {
+    if (app.range_locked) {
+      float lo = 0, hi = 1;
+      render::field_range(app.shown(), o, &lo, &hi);
+      o.range_min = lo;
+      o.range_max = hi;
+    } else {
+      o.range_min = o.range_max = 0;
+    }
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("Keep the colour scale fixed while the run goes on (and for pictures that compare runs)");
+  if (app.range_locked) {
+    float r[2] = {o.range_min, o.range_max};
+    ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.7f);
+    if (ImGui::InputFloat2("range", r, "%.3g") && r[1] > r[0]) {
+      o.range_min = r[0];
+      o.range_max = r[1];
+    }
+  }
+  checkbox_grid("view_boxes", {{"whole fabric", &o.mirror},
+                               {"projectile", &o.show_projectile},
+                               {"clamps", &o.show_clamps},
+                               {"section cut", &o.section_cut},
+                               {"caption", &o.show_caption},
+                               {"colour bar", &o.show_colorbar},
+                               {"scale bar", &o.show_scale_bar},
+                               {"axes", &o.show_axes}});
   // Quality while playing: a software GL (no GPU) spends most of a UI frame on the fabric.
   const float scales[] = {1.0f, 0.75f, 0.5f};
   const char* scale_names[] = {"full", "75 %", "50 %"};
@@ -304,25 +424,19 @@ void view_section(GuiApp& app) {
   for (int i = 0; i < 3; ++i)
     if (std::abs(app.playing_render_scale - scales[i]) < 1e-3f) current = i;
   ImGui::TextUnformatted("resolution while playing");
-  for (int i = 0; i < 3; ++i) {
-    ImGui::SameLine();
-    if (ImGui::RadioButton(scale_names[i], current == i)) app.playing_render_scale = scales[i];
-  }
   help_marker(
       "The fabric is drawn at this fraction of the view's resolution while a run plays or "
       "the mouse drags, and at full resolution once everything is still. The projectile and "
       "the caption always stay sharp. Lower it if the window feels slow without a GPU.");
-  int geometry = int(o.yarn_geometry);
+  radio_row(scale_names, 3, &current);
+  app.playing_render_scale = scales[current];
   ImGui::TextUnformatted("yarns");
-  ImGui::SameLine();
-  if (ImGui::RadioButton("auto", geometry == 0)) o.yarn_geometry = render::YarnGeometry::automatic;
-  ImGui::SameLine();
-  if (ImGui::RadioButton("tubes", geometry == 1)) o.yarn_geometry = render::YarnGeometry::tubes;
-  ImGui::SameLine();
-  if (ImGui::RadioButton("ribbons", geometry == 2)) o.yarn_geometry = render::YarnGeometry::ribbons;
   help_marker(
       "Ribbons: flat strips turned to the eye and shaded as the yarn's elliptic tube, several "
       "times cheaper to draw. Auto uses them unless you zoom in close, then real tubes.");
+  ImGui::SameLine();
+  const char* geometries[] = {"auto", "tubes", "ribbons"};
+  radio_row(geometries, 3, &o.yarn_geometry);
 }
 
 void export_section(GuiApp& app) {
@@ -330,18 +444,28 @@ void export_section(GuiApp& app) {
   std::snprintf(dir, sizeof dir, "%s", app.export_dir.c_str());
   if (ImGui::InputText("folder", dir, sizeof dir)) app.export_dir = dir;
   const float full = ImGui::GetContentRegionAvail().x;
-  const float third = (full - 2 * ImGui::GetStyle().ItemSpacing.x) / 3;
-  if (ImGui::Button("Screenshot", ImVec2(third, 0))) {
+  const float half = (full - ImGui::GetStyle().ItemSpacing.x) / 2;
+  if (ImGui::Button("Screenshot", ImVec2(half, 0))) {
     app.screenshot_requested = true;
     app.screenshot_path = next_screenshot_path(app);
   }
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("PNG of the whole window [P]");
   ImGui::SameLine();
-  if (ImGui::Button("CSV + JSON", ImVec2(third, 0))) export_results(app);
+  if (ImGui::Button("CSV + JSON", ImVec2(half, 0))) export_results(app);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("history.csv and summary.json of the run on screen");
-  ImGui::SameLine();
-  if (ImGui::Button("Scene TOML", ImVec2(third, 0))) export_scene(app);
+  if (ImGui::Button("Scene TOML", ImVec2(half, 0))) export_scene(app);
   if (ImGui::IsItemHovered()) ImGui::SetTooltip("A scene file that reproduces the run on screen: ravel gui FILE");
+  ImGui::SameLine();
+  ImGui::BeginDisabled(app.timeline.empty() || export_running(app));
+  if (ImGui::Button("VTK series", ImVec2(half, 0))) start_vtk_export(app, app.export_dir + "/vtk");
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+    ImGui::SetTooltip("Every kept frame of the run as VTU files and frame.pvd (ParaView), into <folder>/vtk");
+  if (ImGui::Button("Image sequence (+ MP4)", ImVec2(full, 0))) start_image_export(app, app.export_dir + "/images");
+  if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+    ImGui::SetTooltip(
+        "The 3D view of every kept frame as PNGs into <folder>/images, with this camera; and movie.mp4 where ffmpeg "
+        "is installed");
+  ImGui::EndDisabled();
   const int n = int(app.view.past_runs.size());
   ImGui::BeginDisabled(n == 0);
   char label[64];
@@ -475,6 +599,30 @@ void draw_stability_window(GuiApp&) {}
 
 }  // namespace
 
+void check_layout(GuiApp& app, const char* panel) {
+  // From the sixth frame on: a panel's scroll bar appears a frame after its content first
+  // outgrows it, and the frame in between is not a layout anyone sees.
+  if (!app.layout_check || ImGui::GetFrameCount() < 6) return;
+  // Content wider than the panel is clipped (nothing scrolls sideways); content taller than
+  // the panel must scroll. ContentSize is the extent the items reached last frame.
+  const ImGuiWindow* w = ImGui::GetCurrentWindow();
+  const float avail_w = w->ContentRegionRect.GetWidth(), avail_h = w->ContentRegionRect.GetHeight();
+  char b[200];
+  if (w->ContentSize.x > avail_w + 1.0f) {
+    std::snprintf(b, sizeof b, "%s: content %.0f px wide in %.0f px", panel, w->ContentSize.x, avail_w);
+    app.layout_problems.push_back(b);
+  }
+  if (w->ContentSize.y > avail_h + 1.0f && !w->ScrollbarY && !(w->Flags & ImGuiWindowFlags_NoScrollbar)) {
+    std::snprintf(b, sizeof b, "%s: content %.0f px tall in %.0f px and no scroll bar", panel, w->ContentSize.y,
+                  avail_h);
+    app.layout_problems.push_back(b);
+  }
+  if (w->ContentSize.y > avail_h + 1.0f && (w->Flags & ImGuiWindowFlags_NoScrollbar)) {
+    std::snprintf(b, sizeof b, "%s: content %.0f px tall in %.0f px, cut", panel, w->ContentSize.y, avail_h);
+    app.layout_problems.push_back(b);
+  }
+}
+
 bool restart_with_draft(GuiApp& app) {
   try {
     Scene s = parse_scene(scene_to_toml(app.draft), app.draft.source.empty() ? "app" : app.draft.source);
@@ -495,25 +643,29 @@ void set_draft_value(GuiApp& app, const std::string& key_value) {
 }
 
 void draw_left_panel(GuiApp& app) {
+  g_force_open = app.layout_check;
   const ImGuiIO& io = ImGui::GetIO();
-  ImGui::SetNextWindowPos(ImVec2(0, 0));
-  ImGui::SetNextWindowSize(ImVec2(app.left_w, io.DisplaySize.y));
+  ImGui::SetNextWindowPos(ImVec2(0, app.menu_h));
+  ImGui::SetNextWindowSize(ImVec2(app.left_w, io.DisplaySize.y - app.menu_h));
   ImGui::Begin("controls", nullptr,
                ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoMove |
                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus | kFixedPanel);
+  ImGui::PushTextWrapPos(0);
   ImGui::TextColored(kAccent, "ravel");
   ImGui::SameLine();
-  ImGui::TextDisabled("projectile vs woven fabric, yarn by yarn");
+  ImGui::TextDisabled("woven fabric, yarn by yarn");
+  ImGui::PopTextWrapPos();
   ImGui::Separator();
   run_controls(app);
   ImGui::Spacing();
 
-  ImGui::PushItemWidth(ImGui::GetContentRegionAvail().x * 0.58f);
+  // Widgets fill the panel but leave room for their label (and a help marker) on the right.
+  ImGui::PushItemWidth(-ImGui::GetFontSize() * 9.0f);
   bool changed = false;
-  if (ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) changed |= scene_section(app);
-  if (ImGui::CollapsingHeader("Projectile", ImGuiTreeNodeFlags_DefaultOpen)) changed |= projectile_section(app);
-  if (ImGui::CollapsingHeader("Inter-yarn friction", ImGuiTreeNodeFlags_DefaultOpen)) changed |= friction_section(app);
-  if (ImGui::CollapsingHeader("Solver")) changed |= solver_section(app);
+  if (header("Scene", ImGuiTreeNodeFlags_DefaultOpen)) changed |= scene_section(app);
+  if (header("Projectile", ImGuiTreeNodeFlags_DefaultOpen)) changed |= projectile_section(app);
+  if (header("Inter-yarn friction", ImGuiTreeNodeFlags_DefaultOpen)) changed |= friction_section(app);
+  if (header("Solver")) changed |= solver_section(app);
   ImGui::PopItemWidth();
   if (!app.scene_error.empty()) {
     ImGui::PushTextWrapPos(0);
@@ -527,9 +679,19 @@ void draw_left_panel(GuiApp& app) {
   if (app.auto_restart && ImGui::IsMouseReleased(ImGuiMouseButton_Left) &&
       run_key(app.draft) != run_key(app.view.scene))
     restart_with_draft(app);
-  if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
-  if (ImGui::CollapsingHeader("Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
+  if (header("View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
+  if (header("Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
+  {
+    const float full = ImGui::GetContentRegionAvail().x;
+    const float half = (full - ImGui::GetStyle().ItemSpacing.x) / 2;
+    if (ImGui::Button("Open scene...", ImVec2(half, 0))) app.show_open = true;
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("A scene file or a run's folder [Ctrl+O]");
+    ImGui::SameLine();
+    if (ImGui::Button("All scene keys...", ImVec2(half, 0))) app.show_keys = !app.show_keys;
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("Every key of a scene file, with units, defaults and ranges");
+  }
   stability_button(app);
+  check_layout(app, "left panel");
   ImGui::End();
   draw_stability_window(app);
 }
@@ -606,7 +768,9 @@ void draw_charts_panel(GuiApp& app) {
   std::snprintf(now_label, sizeof now_label, "run %ld: mu %.2f, %.0f m/s (now)", v.run_id, v.scene.yarn.friction,
                 v.scene.projectile.velocity_mps);
   vel.series = {{now_label, IM_COL32(255, 170, 60, 255), v_proj}};
-  draw_chart(vel, ImVec2(cw, avail.y));
+  const double cursor = app.live ? -1.0 : app.shown().time_s;
+  vel.cursor_s = cursor;
+  double clicked = draw_chart(vel, ImVec2(cw, avail.y));
 
   ImGui::SameLine(0, gap);
   ChartSpec en;
@@ -626,7 +790,10 @@ void draw_charts_panel(GuiApp& app) {
                {"projectile friction", IM_COL32(200, 150, 100, 255), e_pfric},
                {"contact loss", IM_COL32(170, 170, 170, 255), e_contact},
                {"released (broken)", IM_COL32(255, 110, 160, 255), e_released}};
-  draw_chart(en, ImVec2(ew, avail.y));
+  en.cursor_s = cursor;
+  const double clicked_en = draw_chart(en, ImVec2(ew, avail.y));
+  if (clicked < 0) clicked = clicked_en;
+  if (clicked >= 0) app.scrub_to(clicked);  // click a chart: show the fabric at that time
   ImGui::End();
 }
 
@@ -639,6 +806,7 @@ void draw_status_panel(GuiApp& app) {
                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus | kFixedPanel);
   const WorkerView& v = app.view;
   const Summary& s = v.summary;
+  ImGui::PushTextWrapPos(0);  // long lines wrap in a narrow panel (the numbers are not cut)
   ImVec4 state_colour = kGood;
   std::string state = to_string(v.state);
   if (v.state == WorkerState::diverged) state_colour = kBad;
@@ -654,12 +822,11 @@ void draw_status_panel(GuiApp& app) {
   char overlay[64];
   std::snprintf(overlay, sizeof overlay, "t = %.2f / %.0f \xC2\xB5s", t_us, end_us);
   ImGui::ProgressBar(end_us > 0 ? float(std::min(1.0, t_us / end_us)) : 0.0f, ImVec2(-1, 0), overlay);
+  if (!app.live) ImGui::TextColored(kAccent, "showing t = %.2f \xC2\xB5s (kept frame)", app.shown().time_s * 1e6);
   if (v.steps_per_s > 0)
-    ImGui::Text("%.0f steps/s  %.2f \xC2\xB5s/s", v.steps_per_s, v.sim_us_per_wall_s);
+    ImGui::Text("%.0f steps/s, %.2f \xC2\xB5s/s, UI %.0f fps", v.steps_per_s, v.sim_us_per_wall_s, app.fps);
   else
-    ImGui::TextDisabled("solver idle");
-  ImGui::SameLine();
-  ImGui::TextDisabled("  UI %.0f fps", app.fps);
+    ImGui::TextDisabled("solver idle, UI %.0f fps", app.fps);
   ImGui::Text("%s model, %s", s.model.c_str(), s.contact_model.c_str());
   if (ImGui::IsItemHovered() && !s.model_reason.empty()) ImGui::SetTooltip("%s", s.model_reason.c_str());
   ImGui::Text("%d nodes, %d elements", s.node_count, s.element_count);
@@ -680,11 +847,11 @@ void draw_status_panel(GuiApp& app) {
   ImGui::Text("absorbed %.2f J, friction %.2f J", s.energy_absorbed_J, s.friction_work_J);
   ImGui::Text("broken yarns %d warp, %d weft", s.broken_warp_yarns, s.broken_weft_yarns);
   ImGui::Text("max strain %.2f %%, balance %.1e", s.max_strain * 100, s.energy_balance_error);
-  ImGui::PushTextWrapPos(0);
   if (!v.message.empty()) ImGui::TextColored(kBad, "%s", v.message.c_str());
   for (const auto& w : s.warnings) ImGui::TextColored(kWarn, "warning: %s", w.c_str());
   if (!app.notice.empty()) ImGui::TextColored(app.notice_is_error ? kBad : kGood, "%s", app.notice.c_str());
   ImGui::PopTextWrapPos();
+  check_layout(app, "status panel");
   ImGui::End();
 }
 
@@ -694,28 +861,6 @@ std::string next_screenshot_path(const GuiApp& app) {
     std::snprintf(name, sizeof name, "/%s_screenshot_%03d.png", safe_file_name(app.view.scene.name).c_str(), i);
     const std::string p = app.export_dir + name;
     if (!std::filesystem::exists(p) || i > 999) return p;
-  }
-}
-
-void export_results(GuiApp& app) {
-  try {
-    prepare_output_dir(app.export_dir);
-    write_file_atomic(app.export_dir + "/history.csv", history_csv(app.view.history));
-    write_file_atomic(app.export_dir + "/summary.json", summary_json(app.view.summary, app.view.scene));
-    set_notice(app, "wrote " + app.export_dir + "/history.csv and summary.json", false);
-  } catch (const std::exception& e) {
-    set_notice(app, std::string("export failed: ") + e.what(), true);
-  }
-}
-
-void export_scene(GuiApp& app) {
-  try {
-    prepare_output_dir(app.export_dir);
-    const std::string path = app.export_dir + "/" + safe_file_name(app.view.scene.name) + ".toml";
-    write_file_atomic(path, scene_to_toml(app.view.scene));
-    set_notice(app, "wrote " + path + " (open it with: ravel gui " + path + ")", false);
-  } catch (const std::exception& e) {
-    set_notice(app, std::string("export failed: ") + e.what(), true);
   }
 }
 

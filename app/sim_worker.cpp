@@ -180,6 +180,8 @@ bool SimWorker::sync(WorkerView& view) {
     view.frame_serial = s.frame_serial;
     changed = true;
   }
+  view.new_frames.clear();
+  std::swap(view.new_frames, shared_.queued);  // O(1): the worker starts a fresh queue
   if (view.history.size() > s.history.size()) view.history.clear();
   view.history.insert(view.history.end(), s.history.begin() + long(view.history.size()), s.history.end());
   view.step_count = s.step_count;
@@ -209,6 +211,16 @@ bool SimWorker::wait_idle(std::chrono::milliseconds timeout) {
     return shared_.commands_applied >= commands_issued_.load() && steps_requested_.load() == 0 &&
            shared_.state != WorkerState::running;
   });
+}
+
+void SimWorker::queue_frames(bool on) {
+  queue_frames_.store(on);
+}
+
+bool SimWorker::busy() const {
+  std::lock_guard<std::mutex> lk(mutex_);
+  return !(shared_.commands_applied >= commands_issued_.load() && steps_requested_.load() == 0 &&
+           shared_.state != WorkerState::running);
 }
 
 // ---- Worker thread ---------------------------------------------------------------------
@@ -312,6 +324,9 @@ void SimWorker::publish(bool force) {
   Summary summary = sim_->summary();
   const auto& rows = sim_->history();
   const WorkerState state = current_state();
+  const bool queue = queue_frames_.load();
+  Frame copy;
+  if (queue) copy = frame;
   {
     std::lock_guard<std::mutex> lk(mutex_);
     Shared& s = shared_;
@@ -319,6 +334,16 @@ void SimWorker::publish(bool force) {
       s.run_id = run_id_;
       s.scene = scene_;
       s.history.clear();
+      s.queued.clear();
+    }
+    if (queue) {
+      constexpr std::size_t kMaxQueued = 64;
+      if (s.queued.size() >= kMaxQueued) {  // nobody synced for a while: keep every other
+        std::vector<std::pair<Frame, long>> half;
+        for (std::size_t i = 1; i < s.queued.size(); i += 2) half.push_back(std::move(s.queued[i]));
+        s.queued = std::move(half);
+      }
+      s.queued.emplace_back(std::move(copy), sim_->step_count());
     }
     std::swap(s.frame, frame);
     ++s.frame_serial;

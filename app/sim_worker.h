@@ -75,6 +75,10 @@ struct WorkerView {
   double sim_us_per_wall_s = 0;    // measured simulated rate
   std::vector<PastRun> past_runs;  // oldest first
   std::uint64_t past_serial = 0;
+  // With SimWorker::queue_frames: every frame published since the last sync (oldest first,
+  // with the run's step count when it was taken), not only the newest one. The app's
+  // timeline keeps them all.
+  std::vector<std::pair<Frame, long>> new_frames;
 };
 
 class SimWorker {
@@ -103,6 +107,10 @@ class SimWorker {
   void pause_at(double t_s);
   void clear_past_runs();
   void set_max_past_runs(int n);  // default 6
+  // Queue every published frame for the UI (WorkerView::new_frames), at most 64 between two
+  // syncs (beyond that every other is dropped). Off by default: it costs a Frame copy per
+  // publish.
+  void queue_frames(bool on);
   void request_exit();
 
   bool paused() const { return paused_.load(); }
@@ -121,6 +129,9 @@ class SimWorker {
   // Block until no command is left unapplied and the worker is idle (paused, finished
   // or diverged) or the timeout passes (tests).
   bool wait_idle(std::chrono::milliseconds timeout);
+  // Not idle: a command is not applied yet, steps are pending, or the run is going (the
+  // non-blocking form of wait_idle, for the UI's scripted `wait`).
+  bool busy() const;
 
  private:
   struct Pending {
@@ -146,6 +157,7 @@ class SimWorker {
     std::vector<PastRun> past_runs;
     std::uint64_t past_serial = 0;
     long commands_applied = 0;
+    std::vector<std::pair<Frame, long>> queued;  // frames since the last sync (queue_frames)
   };
 
   void loop();
@@ -190,6 +202,7 @@ class SimWorker {
   std::atomic<int> steps_requested_{0};
   std::atomic<bool> has_pending_{false};
   std::atomic<long> commands_issued_{0};
+  std::atomic<bool> queue_frames_{false};
 
   mutable std::mutex mutex_;           // guards pending_ and shared_
   std::condition_variable wake_;       // worker waits here when idle

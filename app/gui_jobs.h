@@ -1,0 +1,75 @@
+// Internal to the app's GUI files: the state of a running export and of the Studies
+// windows, owned by GuiApp (gui_app.h) through unique_ptrs.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "vtk.h"
+#include "gui_app.h"
+#include "render/render_target.h"
+#include "limit.h"
+#include "sweep_runner.h"
+
+namespace ravel::app::gui {
+
+// A VTK series or an image sequence of the kept frames, a few frames per UI frame.
+struct ExportJob {
+  enum class Kind { vtk, images } kind = Kind::vtk;
+  std::string dir;
+  std::size_t next = 0, total = 0;  // kept frames done / to do
+  long run_id = -1;                 // the run whose frames these are
+  std::vector<PvdEntry> entries;    // vtk: the series so far
+  render::RenderTarget target;      // images: drawn here at the view's size
+  render::Camera camera;            // images: the view's camera when the export started
+  render::ViewOptions options;
+  int width = 0, height = 0;
+  std::string error;
+  bool done = false;
+  std::string mp4;  // images: the movie written (ffmpeg), if any
+};
+
+// A ballistic-limit search on a background thread (the Studies window's limit tab).
+class LimitRunner {
+ public:
+  struct Snapshot {
+    bool running = false, finished = false;
+    std::vector<studies::Shot> runs;  // every run so far, in order
+    studies::LimitResult result;      // valid when finished
+    std::string error, out_dir;
+  };
+  ~LimitRunner();
+  bool start(const std::string& scene_path, const std::vector<std::string>& overrides, const std::string& out_dir,
+             double tolerance_mps, std::string* error);
+  void cancel();
+  bool running() const;
+  Snapshot snapshot() const;
+
+ private:
+  mutable std::mutex mu_;
+  Snapshot state_;
+  std::atomic<bool> interrupt_{false};
+  std::thread thread_;
+};
+
+struct StudiesWindow {
+  bool show_sweep = false, show_limit = false;
+  // Sweep: the --vary lines, folder, jobs.
+  char vary[1024] = "projectile.velocity_mps=180:500:40";
+  char sweep_dir[512] = "";
+  int jobs = 1;
+  std::string sweep_error;
+  int chart_index = 0;
+  studies::SweepRunner sweep;
+  // Ballistic limit.
+  char limit_dir[512] = "";
+  double tolerance_mps = 2;
+  std::string limit_error;
+  LimitRunner limit;
+};
+
+}  // namespace ravel::app::gui

@@ -1,0 +1,313 @@
+// The Studies windows: a sweep and a ballistic-limit search of the scene on screen, run
+// in the background with the studies library (the same code as `ravel sweep` and `ravel
+// limit`), with their live charts. Each writes into a folder the window names (default:
+// the export folder's sweep/ and limit/), with the scene it ran as scene.toml beside it.
+#include <imgui.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <sstream>
+#include <thread>
+
+#include "chart_imgui.h"
+#include "gui_app.h"
+#include "gui_jobs.h"
+#include "results.h"
+
+namespace ravel::app::gui {
+
+// ----------------------------------------------------------------------------- LimitRunner
+
+LimitRunner::~LimitRunner() {
+  cancel();
+  if (thread_.joinable()) thread_.join();
+}
+
+bool LimitRunner::start(const std::string& scene_path, const std::vector<std::string>& overrides,
+                        const std::string& out_dir, double tolerance_mps, std::string* error) {
+  if (running()) {
+    *error = "a search is running";
+    return false;
+  }
+  if (thread_.joinable()) thread_.join();
+  try {
+    load_scene(scene_path, overrides);  // bad scene: say so now, start nothing
+    prepare_output_dir(out_dir);
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+  interrupt_ = false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    state_ = Snapshot{};
+    state_.running = true;
+    state_.out_dir = out_dir;
+  }
+  thread_ = std::thread([this, scene_path, overrides, out_dir, tolerance_mps] {
+    studies::LimitOptions opt;
+    opt.tolerance_mps = tolerance_mps;
+    opt.start_mps = 100;
+    std::vector<std::string> ov = overrides;
+    ov.push_back("solver.end_time_us=auto");
+    try {
+      studies::ShootFn inner = studies::scene_shooter(scene_path, ov, &interrupt_, {}, out_dir);
+      studies::ShootFn shoot = [&](double v, const std::string& why) {
+        studies::Shot s = inner(v, why);
+        s.velocity_mps = v;
+        s.purpose = why;
+        std::lock_guard<std::mutex> lock(mu_);
+        state_.runs.push_back(s);
+        return s;
+      };
+      studies::LimitResult r = studies::find_ballistic_limit(shoot, opt, true);
+      write_file_atomic(out_dir + "/limit.json", studies::limit_json(r, opt, scene_path, ov));
+      std::lock_guard<std::mutex> lock(mu_);
+      state_.result = r;
+      state_.finished = true;
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mu_);
+      state_.error = interrupt_ ? "cancelled; the runs that finished are kept in " + out_dir + "/runs" : e.what();
+    }
+    std::lock_guard<std::mutex> lock(mu_);
+    state_.running = false;
+  });
+  return true;
+}
+
+void LimitRunner::cancel() {
+  interrupt_ = true;
+}
+
+bool LimitRunner::running() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return state_.running;
+}
+
+LimitRunner::Snapshot LimitRunner::snapshot() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return state_;
+}
+
+// ----------------------------------------------------------------------------- windows
+
+namespace {
+
+// The scene on screen as a file in `dir` (what the study runs), and its path.
+std::string write_scene(GuiApp& app, const std::string& dir) {
+  prepare_output_dir(dir);
+  const std::string path = dir + "/scene.toml";
+  write_file_atomic(path, scene_to_toml(app.draft));
+  return path;
+}
+
+std::string default_dir(const GuiApp& app, const char* sub) {
+  return app.export_dir + "/" + sub;
+}
+
+bool start_sweep(GuiApp& app, const std::vector<std::string>& vary_lines) {
+  StudiesWindow& w = *app.studies;
+  if (!*w.sweep_dir) std::snprintf(w.sweep_dir, sizeof w.sweep_dir, "%s", default_dir(app, "sweep").c_str());
+  try {
+    studies::SweepOptions o;
+    o.out_dir = w.sweep_dir;
+    o.scene_path = write_scene(app, o.out_dir + "/.scene");
+    o.jobs = std::max(1, w.jobs);
+    w.sweep_error.clear();
+    if (!w.sweep.start(o, vary_lines, &w.sweep_error)) return false;
+    app.notice = "sweep started into " + o.out_dir;
+    app.notice_is_error = false;
+    return true;
+  } catch (const std::exception& e) {
+    w.sweep_error = e.what();
+    return false;
+  }
+}
+
+bool start_limit(GuiApp& app) {
+  StudiesWindow& w = *app.studies;
+  if (!*w.limit_dir) std::snprintf(w.limit_dir, sizeof w.limit_dir, "%s", default_dir(app, "limit").c_str());
+  try {
+    const std::string scene = write_scene(app, std::string(w.limit_dir) + "/.scene");
+    w.limit_error.clear();
+    if (!w.limit.start(scene, {}, w.limit_dir, w.tolerance_mps, &w.limit_error)) return false;
+    app.notice = std::string("ballistic-limit search started into ") + w.limit_dir;
+    app.notice_is_error = false;
+    return true;
+  } catch (const std::exception& e) {
+    w.limit_error = e.what();
+    return false;
+  }
+}
+
+std::vector<std::string> lines_of(const char* text) {
+  std::vector<std::string> lines;
+  std::stringstream ss(text);
+  for (std::string line; std::getline(ss, line);)
+    if (line.find_first_not_of(" \t") != std::string::npos) lines.push_back(line);
+  return lines;
+}
+
+const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
+
+void sweep_window(GuiApp& app) {
+  StudiesWindow& w = *app.studies;
+  if (!w.show_sweep) return;
+  const float fs = ImGui::GetFontSize();
+  ImGui::SetNextWindowSize(ImVec2(fs * 38, fs * 30), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Sweep", &w.show_sweep)) {
+    ImGui::End();
+    return;
+  }
+  if (!*w.sweep_dir) std::snprintf(w.sweep_dir, sizeof w.sweep_dir, "%s", default_dir(app, "sweep").c_str());
+  const studies::SweepRunner::Snapshot s = w.sweep.snapshot();
+  ImGui::TextWrapped(
+      "Runs of the scene in the panels (its draft) with one or more keys varied, as `ravel sweep` does. One key per "
+      "line: key=start:stop:step or key=v1,v2,...");
+  ImGui::BeginDisabled(s.running);
+  ImGui::InputTextMultiline("##vary", w.vary, sizeof w.vary, ImVec2(-1, ImGui::GetTextLineHeight() * 3.5f));
+  ImGui::InputText("folder", w.sweep_dir, sizeof w.sweep_dir);
+  ImGui::SliderInt("jobs", &w.jobs, 1, int(std::max(1u, std::thread::hardware_concurrency())));
+  if (ImGui::Button("Start sweep")) start_sweep(app, lines_of(w.vary));
+  ImGui::EndDisabled();
+  if (s.running) {
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) w.sweep.cancel();
+  }
+  ImGui::PushTextWrapPos(0);
+  if (!w.sweep_error.empty()) ImGui::TextColored(kBad, "%s", w.sweep_error.c_str());
+  if (!s.error.empty()) ImGui::TextColored(kBad, "%s", s.error.c_str());
+  ImGui::PopTextWrapPos();
+  if (s.progress.total > 0) {
+    char label[128];
+    std::snprintf(label, sizeof label, "%d / %d cases  (%d resumed, %d failed)  %.0f s", s.progress.done,
+                  s.progress.total, s.progress.skipped, s.progress.failed, s.progress.wall_time_s);
+    ImGui::ProgressBar(float(s.progress.done) / float(s.progress.total), ImVec2(-1, 0), label);
+  }
+  if (s.finished)
+    ImGui::Text("done: %d run, %d resumed in %.1f s; %s/results.csv", s.report.cases_run, s.report.cases_skipped,
+                s.report.wall_time_s, w.sweep_dir);
+  const auto charts = s.charts();
+  if (!charts.empty()) {
+    w.chart_index = std::min(w.chart_index, int(charts.size()) - 1);
+    for (int i = 0; i < int(charts.size()); ++i) {
+      if (i) ImGui::SameLine();
+      ImGui::RadioButton(charts[size_t(i)].second.y.label.c_str(), &w.chart_index, i);
+    }
+    studies::draw_chart_imgui(
+        charts[size_t(w.chart_index)].second,
+        ImVec2(ImGui::GetContentRegionAvail().x, std::max(fs * 12, ImGui::GetContentRegionAvail().y)));
+  }
+  ImGui::End();
+}
+
+void limit_window(GuiApp& app) {
+  StudiesWindow& w = *app.studies;
+  if (!w.show_limit) return;
+  const float fs = ImGui::GetFontSize();
+  ImGui::SetNextWindowSize(ImVec2(fs * 36, fs * 30), ImGuiCond_FirstUseEver);
+  if (!ImGui::Begin("Ballistic limit", &w.show_limit)) {
+    ImGui::End();
+    return;
+  }
+  if (!*w.limit_dir) std::snprintf(w.limit_dir, sizeof w.limit_dir, "%s", default_dir(app, "limit").c_str());
+  const LimitRunner::Snapshot s = w.limit.snapshot();
+  ImGui::TextWrapped(
+      "The lowest impact velocity that perforates the scene in the panels, by bracketing and bisection, as `ravel "
+      "limit` finds it (runs extended until they decide). Runs near the limit last 0.5-5 ms of simulated time: a "
+      "search takes minutes.");
+  ImGui::BeginDisabled(s.running);
+  ImGui::InputText("folder", w.limit_dir, sizeof w.limit_dir);
+  ImGui::SetNextItemWidth(fs * 8);
+  ImGui::InputDouble("tolerance (m/s)", &w.tolerance_mps, 0, 0, "%.2f");
+  w.tolerance_mps = std::clamp(w.tolerance_mps, 0.05, 50.0);
+  if (ImGui::Button("Start search")) start_limit(app);
+  ImGui::EndDisabled();
+  if (s.running) {
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) w.limit.cancel();
+  }
+  ImGui::PushTextWrapPos(0);
+  if (!w.limit_error.empty()) ImGui::TextColored(kBad, "%s", w.limit_error.c_str());
+  if (!s.error.empty()) ImGui::TextColored(kBad, "%s", s.error.c_str());
+  ImGui::PopTextWrapPos();
+  if (s.finished) {
+    if (s.result.bracketed)
+      ImGui::Text("ballistic limit %.1f m/s (bracket %.2f - %.2f)%s", s.result.ballistic_limit_mps, s.result.lo_mps,
+                  s.result.hi_mps, s.result.converged ? "" : ", not converged");
+    else
+      ImGui::TextColored(kBad, "no bracket: %s", s.result.warnings.empty() ? "" : s.result.warnings[0].c_str());
+    if (s.result.fit.ok)
+      ImGui::TextDisabled("Lambert-Jonas fit: %.1f m/s (a %.2f, p %.2f)", s.result.fit.vbl_mps, s.result.fit.a,
+                          s.result.fit.p);
+    ImGui::TextDisabled("%s/limit.json", s.out_dir.c_str());
+  } else if (s.running) {
+    ImGui::Text("run %zu ...", s.runs.size() + 1);
+  }
+  if (ImGui::BeginTable("runs", 4, ImGuiTableFlags_RowBg | ImGuiTableFlags_ScrollY,
+                        ImVec2(0, std::max(fs * 6, ImGui::GetContentRegionAvail().y)))) {
+    ImGui::TableSetupColumn("velocity (m/s)");
+    ImGui::TableSetupColumn("outcome");
+    ImGui::TableSetupColumn("residual (m/s)");
+    ImGui::TableSetupColumn("wall (s)");
+    ImGui::TableHeadersRow();
+    for (const auto& r : s.runs) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::Text("%.2f", r.velocity_mps);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.failed       ? "failed"
+                             : r.perforated ? "perforated"
+                             : r.decided    ? r.end_reason.c_str()
+                                            : "undecided");
+      ImGui::TableNextColumn();
+      ImGui::Text("%.1f", r.residual_velocity_mps);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.0f%s", r.wall_time_s, r.resumed ? " (kept)" : "");
+    }
+    ImGui::EndTable();
+  }
+  ImGui::End();
+}
+
+}  // namespace
+
+void studies_menu_items(GuiApp& app) {
+  StudiesWindow& w = *app.studies;
+  if (ImGui::MenuItem("Sweep...", nullptr, w.show_sweep)) w.show_sweep = !w.show_sweep;
+  if (ImGui::MenuItem("Ballistic limit...", nullptr, w.show_limit)) w.show_limit = !w.show_limit;
+}
+
+void draw_studies_windows(GuiApp& app) {
+  sweep_window(app);
+  limit_window(app);
+}
+
+bool studies_running(const GuiApp& app) {
+  return app.studies->sweep.running() || app.studies->limit.running();
+}
+
+bool start_scripted_sweep(GuiApp& app, const std::string& vary) {
+  StudiesWindow& w = *app.studies;
+  w.show_sweep = true;
+  std::snprintf(w.vary, sizeof w.vary, "%s", vary.c_str());
+  const bool ok = start_sweep(app, {vary});
+  if (!ok) {
+    app.notice = "sweep: " + w.sweep_error;
+    app.notice_is_error = true;
+  }
+  return ok;
+}
+
+bool start_scripted_limit(GuiApp& app) {
+  app.studies->show_limit = true;
+  const bool ok = start_limit(app);
+  if (!ok) {
+    app.notice = "limit: " + app.studies->limit_error;
+    app.notice_is_error = true;
+  }
+  return ok;
+}
+
+}  // namespace ravel::app::gui

@@ -1,0 +1,184 @@
+#!/usr/bin/env bash
+# The app's features driven under a virtual X server (xvfb-run), one case per ctest entry:
+#
+#   layout WxH    every panel fits a WxH window: with RAVEL_LAYOUT_CHECK the app opens every
+#                 section and reports any panel whose content is wider than the panel, or
+#                 taller without a scroll bar; the screenshot is checked (size, UI, fabric)
+#   scrub         run to 60 us, go back to 20 us: the view and the status show 20 us and the
+#                 run is still at 60 us (not re-run); scrubbing while the run plays leaves the
+#                 run's history bit for bit as a run without scrubbing
+#   pick          pick an element by id at 20 us: the strain the app reports is the strain
+#                 of that element in `ravel run --vtk` at the same time
+#   open-error    open a scene with a typo: the message names the key and file:line, the run
+#                 on screen is kept; a refused scripted edit is reported and the app goes on;
+#                 both make the app exit non-zero at the end
+#   export        the kept frames as a VTK series (frame.pvd + one VTU per kept frame) and as
+#                 an image sequence
+#   sweep         a sweep panel run of 2 velocities writes the same results.csv (timing
+#                 columns aside) as `ravel sweep` with the same values
+#
+# usage: gui_feature_test.sh RAVEL OUT_DIR CASE [ARG] [PYTHON3]
+set -euo pipefail
+ravel=$1
+out=$2
+case_name=$3
+arg=${4:--}
+python=${5:-python3}
+here=$(cd "$(dirname "$0")" && pwd)
+rm -rf "$out"
+mkdir -p "$out"
+cd "$out"
+
+fail() {
+  echo "FAIL ($case_name): $*"
+  [ -f log.txt ] && { echo "--- log"; cat log.txt; }
+  [ -f err.txt ] && { echo "--- stderr"; cat err.txt; }
+  exit 1
+}
+
+# run_gui W H ARGS...: the app in a WxH window; stdout -> log.txt, stderr -> err.txt; sets rc.
+run_gui() {
+  local w=$1 h=$2
+  shift 2
+  set +e
+  xvfb-run -a -s "-screen 0 ${w}x${h}x24" "$ravel" gui --size "${w}x${h}" "$@" >log.txt 2>err.txt
+  rc=$?
+  set -e
+}
+
+case "$case_name" in
+layout)
+  w=${arg%x*}
+  h=${arg#*x}
+  RAVEL_LAYOUT_CHECK=1 run_gui "$w" "$h" --frames 12 --paused --export-dir "$out/export" --screenshot "$out/app.png"
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  grep -q "layout check at ${w}x${h}: every panel fits" log.txt || fail "a panel does not fit"
+  "$python" "$here/check_screenshot.py" app.png "$w" "$h"
+  ;;
+
+scrub)
+  run_gui 1280 720 --frames 6 --pause-at-us 60 --do 1:play --do 2:wait --do 3:scrub:20 --do 5:screenshot:"$out/scrub.png"
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  line=$(grep "showing t = " log.txt) || fail "no scrub report"
+  shown=$(echo "$line" | sed -E 's/.*showing t = ([0-9.]+) us.*/\1/')
+  run_at=$(echo "$line" | sed -E 's/.*run at ([0-9.]+) us.*/\1/')
+  # The kept frame nearest 20 us: the worker publishes a frame every ~15 ms of stepping, a
+  # few steps (under 1 us of simulated time) apart, and the app keeps every one of them.
+  awk -v s="$shown" 'BEGIN { exit !(s >= 19.5 && s <= 20.5) }' || fail "shows t = $shown us, expected 20 +- 0.5 us"
+  awk -v r="$run_at" 'BEGIN { exit !(r >= 60.0 && r < 60.2) }' || fail "the run is at $run_at us, expected 60 us"
+  grep -Eq "simulated time 60\.[0-9]+ us, run 1 paused" log.txt || fail "the run moved or was re-run"
+  "$python" "$here/check_screenshot.py" scrub.png 1280 720
+  # Scrubbing while the run plays does not disturb it: the history is bit for bit the same.
+  run_gui 1280 720 --frames 12 --pause-at-us 30 --export-dir "$out/a" --do 1:play --do 3:scrub:1 --do 5:scrub:3 \
+    --do 6:live --do 8:wait --do 9:export-results
+  [ "$rc" -eq 0 ] || fail "scrubbing run: the app exited $rc"
+  run_gui 1280 720 --frames 12 --pause-at-us 30 --export-dir "$out/b" --do 1:play --do 8:wait --do 9:export-results
+  [ "$rc" -eq 0 ] || fail "plain run: the app exited $rc"
+  [ -s a/history.csv ] && [ -s b/history.csv ] || fail "no history exported"
+  cmp a/history.csv b/history.csv || fail "scrubbing changed the run's history"
+  ;;
+
+pick)
+  # The most strained element at 20 us in a headless run (cell of copy 0 = modelled element).
+  "$ravel" run --set solver.end_time_us=20 --vtk --frames final --out "$out/run" --quiet >/dev/null
+  element=$("$python" - "$out/run/vtk" <<'EOF'
+import sys, xml.etree.ElementTree as ET
+import meshio
+folder = sys.argv[1]
+last = list(ET.parse(folder + "/frame.pvd").getroot().iter("DataSet"))[-1]
+m = meshio.read(folder + "/" + last.get("file"))
+strain, copy = m.cell_data["strain"][0], m.cell_data["copy"][0]
+best = max((s, i) for i, (s, c) in enumerate(zip(strain, copy)) if c == 0)
+print(best[1])
+EOF
+)
+  run_gui 1280 720 --frames 6 --pause-at-us 20 --do 1:play --do 2:wait --do 3:pick:"$element" \
+    --do 4:screenshot:"$out/pick.png"
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  line=$(grep "picked element $element " log.txt) || fail "no pick report"
+  t_us=$(echo "$line" | sed -E 's/.* at t = ([0-9.]+) us.*/\1/')
+  strain=$(echo "$line" | sed -E 's/.*strain ([-0-9.e+]+),.*/\1/')
+  "$python" - "$out/run/vtk" "$element" "$strain" "$t_us" <<'EOF'
+import sys, xml.etree.ElementTree as ET
+import meshio
+folder, element, strain, t_us = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), float(sys.argv[4])
+last = list(ET.parse(folder + "/frame.pvd").getroot().iter("DataSet"))[-1]
+t_vtu = float(last.get("timestep")) * 1e6
+if abs(t_vtu - t_us) > 1e-3:
+    raise SystemExit(f"FAIL: the run's last VTU is at {t_vtu} us, the app paused at {t_us} us")
+m = meshio.read(folder + "/" + last.get("file"))
+vtu = float(m.cell_data["strain"][0][element])
+if vtu < 1e-3:
+    raise SystemExit(f"FAIL: element {element} carries no strain ({vtu}): not a meaningful check")
+# Both are the float the Frame holds: equal to the 9 digits the app prints.
+if abs(vtu - strain) > 1e-8 * abs(vtu):
+    raise SystemExit(f"FAIL: app strain {strain!r} != VTU strain {vtu!r} (element {element}, t = {t_us} us)")
+print(f"element {element} at {t_us} us: app strain {strain:.9g} = VTU strain {vtu:.9g}")
+EOF
+  "$python" "$here/check_screenshot.py" pick.png 1280 720
+  ;;
+
+open-error)
+  cat >bad.toml <<'EOF'
+name = "bad"
+[yarn]
+friction = 0.3
+frction = 0.2
+EOF
+  run_gui 1280 720 --frames 8 --paused --do 2:open:"$out/bad.toml" --do 4:set:yarn.friction=-1 --do 6:step
+  cat log.txt err.txt
+  [ "$rc" -ne 0 ] || fail "the app exited 0 after a refused open and a refused edit"
+  grep -q "bad.toml:4" err.txt || fail "the open error does not give file:line (bad.toml:4)"
+  grep -q "frction" err.txt || fail "the open error does not name the key"
+  grep -q "yarn.friction" err.txt || fail "the refused edit does not name the key"
+  grep -Eq "run 1 paused, mu 0\.20" log.txt || fail "the current run was not kept (expected run 1, mu 0.20)"
+  ;;
+
+export)
+  run_gui 1024 640 --frames 10 --pause-at-us 12 --export-dir "$out/exp" --do 1:play --do 2:wait \
+    --do 3:export-vtk:"$out/vtk" --do 4:wait --do 5:record:"$out/images" --do 6:wait
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  [ -s vtk/frame.pvd ] || fail "no frame.pvd"
+  n_vtu=$(ls vtk/frame_*.vtu | wc -l)
+  n_pvd=$(grep -c "<DataSet" vtk/frame.pvd)
+  [ "$n_vtu" -ge 3 ] && [ "$n_vtu" -eq "$n_pvd" ] || fail "$n_vtu VTU files, $n_pvd in the PVD"
+  n_png=$(ls images/frame_*.png | wc -l)
+  [ "$n_png" -eq "$n_vtu" ] || fail "$n_png images for $n_vtu kept frames"
+  ls vtk images | grep -q '\.tmp' && fail "temporary files left"
+  ;;
+
+sweep)
+  run_gui 1280 720 --frames 6 --paused --export-dir "$out/app" --do 2:sweep:projectile.velocity_mps=450,500 \
+    --do 3:wait
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  [ -s app/sweep/results.csv ] || fail "the sweep panel wrote no results.csv"
+  "$ravel" sweep --vary projectile.velocity_mps=450,500 --jobs 1 --out "$out/cli" --quiet >/dev/null
+  # Every column but the wall-clock ones must match.
+  "$python" - app/sweep/results.csv cli/results.csv <<'EOF'
+import csv, sys
+a = list(csv.DictReader(open(sys.argv[1])))
+b = list(csv.DictReader(open(sys.argv[2])))
+if len(a) != 2 or len(b) != 2:
+    raise SystemExit(f"FAIL: {len(a)} and {len(b)} rows, expected 2")
+skip = {"wall_time_s", "node_steps_per_s"}
+for ra, rb in zip(a, b):
+    for k in rb:
+        if k in skip:
+            continue
+        if ra.get(k) != rb[k]:
+            raise SystemExit(f"FAIL: {k}: app {ra.get(k)!r} != ravel sweep {rb[k]!r}")
+print("the app's sweep equals ravel sweep:", [r["residual_velocity_mps"] for r in a])
+EOF
+  ;;
+
+*)
+  echo "unknown case $case_name"
+  exit 2
+  ;;
+esac
+echo "gui $case_name ok"
