@@ -10,7 +10,7 @@
 int main(int argc, char** argv) {
   using namespace ravel::app;
   // How solver threads wait at the step's barriers: spin briefly on an idle machine, sleep
-  // on a loaded one or in the GUI (see app/omp_env.h).
+  // on a loaded one or in the GUI (see app/cli/omp_env.h).
   std::string cmd = argc > 1 ? argv[1] : "";
   const bool opens_gui = cmd.empty() || cmd == "gui" || (cmd.size() > 5 && cmd.substr(cmd.size() - 5) == ".toml");
   choose_omp_wait_policy(argv, opens_gui);

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "../app/omp_env.h"
+#include "../app/cli/omp_env.h"
 #include "scene.h"
 #include "contact_lanes.h"
 #include "simulation.h"

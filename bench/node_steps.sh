@@ -19,7 +19,7 @@ out="$here/node_steps.csv"
 [ -x "$bench" ] || { echo "node_steps.sh: $bench not found (build first)" >&2; exit 1; }
 
 # How the solver threads wait at barriers is chosen by bench_impact at start-up from the
-# machine's load, as the ravel executable does (app/omp_env.h): spin up to 20,000 rounds
+# machine's load, as the ravel executable does (app/cli/omp_env.h): spin up to 20,000 rounds
 # when there is a core for each thread, sleep otherwise. The choice is in each row
 # (omp_spincount). Set OMP_WAIT_POLICY / GOMP_SPINCOUNT to force one.
 

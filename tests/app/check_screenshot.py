@@ -66,7 +66,7 @@ def main():
             for x in range(int(x0), int(x1), step):
                 yield row[x * bpp], row[x * bpp + 1], row[x * bpp + 2]
 
-    # Layout of the app at this size (app/cmd_gui.cpp): left panel 25 % of the width
+    # Layout of the app at this size (app/gui/cmd_gui.cpp): left panel 25 % of the width
     # (330..420 px), charts and status in the bottom 36 % (250..400 px).
     left = min(max(w * 0.25, 330), 420)
     bottom = min(max(h * 0.36, 250), 400)

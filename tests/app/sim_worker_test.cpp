@@ -1,4 +1,4 @@
-// The worker / UI exchange without a window (app/sim_worker.h): commands are applied at
+// The worker / UI exchange without a window (app/worker/sim_worker.h): commands are applied at
 // step boundaries, every published view is one consistent instant, pause / reset /
 // restart / exit behave, and nothing deadlocks. Also run under ThreadSanitizer
 // (docs/app.md).

@@ -1,4 +1,4 @@
-// The app's timeline (app/timeline.h): frames kept within a memory budget, evenly thinned,
+// The app's timeline (app/worker/timeline.h): frames kept within a memory budget, evenly thinned,
 // found by time and rebuilt whole.
 #include "timeline.h"
 

@@ -1,4 +1,4 @@
-// The guided demos (app/demos.h, app/demo_render.h) headless under OSMesa, quick mode.
+// The guided demos (app/demos/demos.h, app/demos/demo_render.h) headless under OSMesa, quick mode.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,6 +1,6 @@
 // `ravel gui [SCENE] [--set k=v ...]`: the interactive app. GLFW window, Dear ImGui and
 // all GL on this (the main) thread; the simulation on SimWorker's std::thread
-// (app/sim_worker.h). Each UI frame: poll events, sync() the worker's last published
+// (app/worker/sim_worker.h). Each UI frame: poll events, sync() the worker's last published
 // step into the UI's own copy under a short lock, keep it in the timeline, lay out the
 // panels, draw the frame on show (the run's latest, or a kept one while scrubbing) with
 // render::Renderer into the 3D view, draw ImGui on top, swap.
@@ -209,7 +209,7 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
     if (!gui::start_scripted_sweep(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "limit") {
     if (!gui::start_scripted_limit(app)) script_failed(app, app.notice);
-  } else if (a.action == "demo") {  // the Demos menu (app/gui_demos.h)
+  } else if (a.action == "demo") {  // the Demos menu (app/gui/gui_demos.h)
     if (!g_compare || !g_compare->start_demo(app, a.arg)) script_failed(app, "demo: " + app.notice);
   } else if (a.action == "continue") {
     if (g_compare) g_compare->resume();

@@ -7,7 +7,7 @@
 // the clock (SimWorker::pause_at) and to play again when the clock moves on. So no run
 // is ever ahead of the clock, the slowest run gates the others, and at a key frame every
 // run stops at the same simulated time (within one time step). The clock logic is in
-// demos::SharedClock (app/demos.h: no GL, no ImGui) so it is unit-tested.
+// demos::SharedClock (app/demos/demos.h: no GL, no ImGui) so it is unit-tested.
 #pragma once
 
 #include <memory>

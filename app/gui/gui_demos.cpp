@@ -1,4 +1,4 @@
-// The app's Demos menu and "Compare runs" (app/gui_demos.h).
+// The app's Demos menu and "Compare runs" (app/gui/gui_demos.h).
 #include "gui_demos.h"
 
 #include <glad/gl.h>

@@ -26,7 +26,7 @@ struct CommonArgs {
   std::vector<std::string> switches;                      // --name without value
 };
 
-// The options of `command` as app/commands_table.cpp lists them; anything else, or a
+// The options of `command` as app/cli/commands_table.cpp lists them; anything else, or a
 // single-valued option given twice, throws UsageError.
 CommonArgs parse_args(const std::vector<std::string>& args, const std::string& command);
 

@@ -1,5 +1,5 @@
 // Time travel and picking: the time slider under the 3D view, the frames kept of the
-// run (app/timeline.h), and the element or crossing the user clicked (render/picking.h).
+// run (app/worker/timeline.h), and the element or crossing the user clicked (render/picking.h).
 #include <imgui.h>
 
 #include <algorithm>

@@ -29,7 +29,7 @@
 
 namespace ravel::app {
 
-// app/cmd_run.cpp
+// app/cli/cmd_run.cpp
 std::atomic<bool>& interrupt_flag();
 void install_signal_handlers();
 

@@ -1,5 +1,5 @@
 // `ravel demo --list` and `ravel demo NAME|all --out DIR [--quick] [--size WxH] [--threads N]
-// [--quiet]`: the guided demos (app/demos.h) rendered headless (OSMesa) as captioned PNGs
+// [--quiet]`: the guided demos (app/demos/demos.h) rendered headless (OSMesa) as captioned PNGs
 // of their key frames, their charts and DIR/index.md, for handouts and slides.
 #include <cstdio>
 #include <filesystem>

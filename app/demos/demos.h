@@ -4,7 +4,7 @@
 // A demo is a few runs (a scene + overrides each) shown side by side with one clock, key
 // frames (simulated times) where it pauses with a two-line caption, and the charts it
 // hands out. The app's Demos menu (app/gui_compare.cpp) and `ravel demo NAME --out DIR`
-// (app/cmd_demo.cpp, headless PNGs through app/demo_render.*) both read this catalogue;
+// (app/cli/cmd_demo.cpp, headless PNGs through app/demos/demo_render.*) both read this catalogue;
 // docs/demos.md explains each demo to teachers.
 #pragma once
 
@@ -117,7 +117,7 @@ MeasuredFronts measure_fronts(const Scene& scene, const Frame& frame);
 
 // ---- Shared clock (the app's split viewports) ---------------------------------------------
 
-// The clock that keeps 2-4 runs in step (app/gui_demos.h): it advances at the slow-motion
+// The clock that keeps 2-4 runs in step (app/gui/gui_demos.h): it advances at the slow-motion
 // rate, never more than `lead_s` ahead of the slowest run, and never past the next stop
 // (a key frame). Each run is paused when it reaches the clock, so the slowest gates all.
 class SharedClock {

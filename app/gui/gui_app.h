@@ -1,4 +1,4 @@
-// The app's UI-thread state and panels (app/cmd_gui.cpp runs the window and the loop).
+// The app's UI-thread state and panels (app/gui/cmd_gui.cpp runs the window and the loop).
 //
 // Everything here lives on the main thread: the panels edit `draft` (a Scene) and send
 // commands to the SimWorker; they read only `view`, the copy SimWorker::sync() brings

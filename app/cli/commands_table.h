@@ -1,4 +1,4 @@
-// The command line's one table of sub-commands and their options (app/commands_table.cpp):
+// The command line's one table of sub-commands and their options (app/cli/commands_table.cpp):
 // what parse_args accepts and what `ravel help COMMAND` prints.
 #pragma once
 

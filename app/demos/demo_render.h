@@ -1,4 +1,4 @@
-// Headless rendering of the guided demos (app/demos.h) for handouts and slides:
+// Headless rendering of the guided demos (app/demos/demos.h) for handouts and slides:
 // `ravel demo NAME --out DIR` writes DIR/NN_<name>_<t>us.png for every key frame (the runs
 // side by side in split viewports, the two-line caption, the theory overlay, the velocity
 // chart so far), the charts (PNG + SVG + CSV through studies/chart.h) and DIR/index.md.
