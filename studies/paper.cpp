@@ -533,6 +533,27 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   for (double mu : plan.frictions)
     if (const VelocityRow* r = find_row(mu, kDefaultFailure, plan.history_velocity_mps))
       histories[mu] = parse_csv(read_text_file(so.out_dir + "/" + r->case_name + "/history.csv"));
+  // The first yarn break of a history (time in us, and a column's value then): what splits a
+  // run's friction work into the part before any yarn broke and the part after.
+  struct FirstBreak {
+    double t_us = NAN, friction_J = NAN;
+  };
+  auto first_break = [&](double mu) {
+    FirstBreak fb;
+    const auto it = histories.find(mu);
+    if (it == histories.end()) return fb;
+    const Csv& h = it->second;
+    const int tc = h.column("t_s"), bw = h.column("broken_warp"), bf = h.column("broken_weft"),
+              fc = h.column("friction_work_J");
+    if (tc < 0 || bw < 0 || bf < 0 || fc < 0) return fb;
+    for (const auto& r : h.rows)
+      if (to_d(r[size_t(bw)]) + to_d(r[size_t(bf)]) > 0) {
+        fb.t_us = to_d(r[size_t(tc)]) * 1e6;
+        fb.friction_J = to_d(r[size_t(fc)]);
+        break;
+      }
+    return fb;
+  };
   auto history_series = [&](const Csv& h, const std::string& column, const std::string& name, double scale = 1) {
     Series s;
     s.name = name;
@@ -734,6 +755,10 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
         return r->perforated ? num(r->perforation_time_s * 1e6, "%.1f") + " us" : std::string("no perforation");
       };
       c.ravel = "mu = 1.0: " + t(r1) + "; mu = 0.2: " + t(r2);
+      // What sets the time: the first yarn breaks (a strain build-up nearly independent of mu).
+      const FirstBreak b1 = first_break(1.0), b2 = first_break(0.2);
+      if (std::isfinite(b1.t_us) && std::isfinite(b2.t_us))
+        c.ravel += " (first yarn breaks at " + num(b1.t_us, "%.1f") + " and " + num(b2.t_us, "%.1f") + " us)";
       if (r1->perforated && r2->perforated) {
         const bool earlier = r1->perforation_time_s < r2->perforation_time_s;
         const bool near73 = std::abs(r1->perforation_time_s * 1e6 - 73) <= 15;
@@ -769,6 +794,12 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     if (const VelocityRow* r = find_row(0.2, kDefaultFailure, plan.history_velocity_mps)) {
       c.ravel = "yarn-yarn friction work " + num(r->friction_work_J, "%.2f") + " J of " + num(r->energy_J, "%.1f") +
                 " J absorbed";
+      // Isolated: what friction took before any yarn broke, and after (broken yarns retracting
+      // through the weave, unclamped yarns dragged through it by the projectile).
+      const FirstBreak b = first_break(0.2);
+      if (std::isfinite(b.t_us))
+        c.ravel += "; " + num(b.friction_J, "%.2f") + " J of it before the first yarn broke (" + num(b.t_us, "%.1f") +
+                   " us), the rest after";
       c.verdict = r->friction_work_J >= 1.0 / 3 && r->friction_work_J <= 3 ? "agrees"
                   : r->friction_work_J < 0.1 * r->energy_J                 ? "partly"
                                                                            : "differs";
