@@ -46,6 +46,7 @@
 #include "gui_app.h"
 #include "gui_demos.h"
 #include "gui_jobs.h"
+#include "modes.h"
 #include "render/render_target.h"
 #include "render/renderer.h"
 #include "results.h"
@@ -72,8 +73,6 @@ void on_glfw_error(int, const char* description) {
 void* glfw_loader(const char* name) {
   return reinterpret_cast<void*>(glfwGetProcAddress(name));
 }
-
-gui::CompareMode* g_compare = nullptr;  // the Demos menu / Compare runs (one per app)
 
 struct ScriptAction {
   std::string action, arg;
@@ -178,9 +177,11 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
       script_failed(app, "range: expected LO:HI with HI > LO, or auto, got '" + a.arg + "'");
     }
   } else if (a.action == "scrub") {
-    if (g_compare && g_compare->active()) {  // compare / demos: every run to the same time
-      g_compare->scrub_to(std::atof(a.arg.c_str()) * 1e-6);
-      std::printf("ravel gui: compare runs shown at t = %.6f us\n", g_compare->scrub_time_s() * 1e6);
+    if (app.compare && app.compare->active()) {  // compare / demos: every run to the same time
+      app.compare->scrub_to(std::atof(a.arg.c_str()) * 1e-6);
+      std::printf("ravel gui: compare runs shown at t = %.6f us\n", app.compare->scrub_time_s() * 1e6);
+      for (std::size_t i = 0; i < app.compare->views().size(); ++i)
+        std::printf("ravel gui: compare run %zu shows t = %.6f us\n", i + 1, app.compare->shown(i).time_s * 1e6);
       return;
     }
     app.scrub_to(std::atof(a.arg.c_str()) * 1e-6);
@@ -188,7 +189,7 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
                 app.view.frame.time_s * 1e6);
   } else if (a.action == "live") {
     app.go_live();
-    if (g_compare) g_compare->go_live();
+    if (app.compare) app.compare->go_live();
   } else if (a.action == "pick") {
     gui::pick_element(app, std::atoi(a.arg.c_str()));
     if (app.notice_is_error) script_failed(app, app.notice);
@@ -210,11 +211,11 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
   } else if (a.action == "limit") {
     if (!gui::start_scripted_limit(app)) script_failed(app, app.notice);
   } else if (a.action == "demo") {  // the Demos menu (app/gui/gui_demos.h)
-    if (!g_compare || !g_compare->start_demo(app, a.arg)) script_failed(app, "demo: " + app.notice);
+    if (!app.compare || !app.compare->start_demo(app, a.arg)) script_failed(app, "demo: " + app.notice);
   } else if (a.action == "continue") {
-    if (g_compare) g_compare->resume();
+    if (app.compare) app.compare->resume();
   } else if (a.action == "compare-exit") {
-    if (g_compare && g_compare->active()) g_compare->stop(app);
+    if (app.compare && app.compare->active()) app.compare->stop(app);
   } else if (a.action == "screenshot") {
     app.screenshot_requested = true;
     app.screenshot_path = a.arg.empty() ? gui::next_screenshot_path(app) : a.arg;
@@ -291,20 +292,20 @@ void handle_input(GuiApp& app) {
   }
   // Drags that started in the view keep going even if the mouse leaves it. A left click
   // that does not move (less than 4 px) picks: an element, or a crossing with Ctrl.
-  static bool dragging = false;
-  static ImVec2 press_at;
-  static float moved = 0;
+  bool& dragging = app.dragging;
+  float& moved = app.drag_px;
   const bool any_down = ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2);
   if (!any_down) dragging = false;
   if (any_down && !dragging && !io.WantCaptureMouse && in_view &&
       (ImGui::IsMouseClicked(0) || ImGui::IsMouseClicked(1) || ImGui::IsMouseClicked(2))) {
     dragging = true;
-    press_at = m;
+    app.press_x = m.x;
+    app.press_y = m.y;
     moved = 0;
   }
   if (dragging) {
     const ImVec2 d = io.MouseDelta;
-    moved = std::max(moved, std::hypot(m.x - press_at.x, m.y - press_at.y));
+    moved = std::max(moved, std::hypot(m.x - app.press_x, m.y - app.press_y));
     const bool pan = ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2) || (ImGui::IsMouseDown(0) && io.KeyShift);
     if (pan)
       app.camera.pan(-d.x / std::max(1.0f, app.view_h), d.y / std::max(1.0f, app.view_h));
@@ -385,91 +386,6 @@ void draw_help(GuiApp& app) {
   ImGui::End();
 }
 
-// The 3D view is drawn into a texture and redrawn only when something changed: a new
-// frame from the worker, the camera, the view options, the size. Drawing the whole fabric
-// costs tens of milliseconds under a software GL, so while the run plays a new frame is
-// drawn at most at a rate that leaves most of each second to the UI (panels, charts and
-// input stay at 30+ fps); camera moves redraw at once, with thinner tubes while the mouse
-// drags or the run plays, and full quality once everything is still.
-class ViewCache {
- public:
-  void release() {
-    target_.release();
-    valid_ = false;
-  }
-
-  // Redraw if needed; `force_hq` for screenshots. Returns true if it drew.
-  bool update(render::Renderer& renderer, const GuiApp& app, int w, int h, float ui_scale, bool busy, bool force_hq) {
-    using Clock = std::chrono::steady_clock;
-    const auto now = Clock::now();
-    if (target_.resize(w, h)) valid_ = false;
-    const std::string key = view_key(app);
-    const bool new_frame = app.shown_serial() != drawn_serial_;
-    const bool view_changed = key != drawn_key_;
-    if (busy || new_frame || view_changed) last_change_ = now;
-    const bool still = now - last_change_ > std::chrono::milliseconds(250);
-    // Budget: at most about a quarter of wall time on the fabric while a run plays.
-    const auto min_gap = std::chrono::duration<double, std::milli>(std::max(66.0, 3.0 * last_ms_));
-    bool draw = !valid_ || view_changed || force_hq || (new_frame && !app.live);  // scrubbing: at once
-    if (!draw && new_frame && now - last_draw_ >= min_gap) draw = true;
-    if (!draw && still && !hq_) draw = true;  // settle to full quality
-    if (!draw || app.shown().node_pos.empty()) return false;
-
-    const bool hq = force_hq || (still && !busy && !new_frame && !view_changed) ||
-                    (!busy && app.view.state != WorkerState::running && !new_frame);
-    render::ViewOptions o = app.view_options;
-    o.ui_scale = ui_scale;
-    o.tube_sides = hq ? std::max(8, o.tube_sides) : 4;
-    // Lower internal resolution while busy (View panel); projectile and caption stay sharp.
-    o.render_scale = hq ? 1.0f : app.playing_render_scale;
-    // Close-ups use real tubes when still; while busy ribbons are always good enough.
-    if (!hq && o.yarn_geometry == render::YarnGeometry::automatic) o.yarn_geometry = render::YarnGeometry::ribbons;
-    // ...and consecutive elements merge where the result is within half a pixel.
-    if (!hq) o.merge_px = 0.5f;
-    const auto t0 = Clock::now();
-    target_.bind();
-    renderer.draw(app.shown(), app.camera, o, 0, 0, w, h);
-    render::RenderTarget::bind_window();
-    glFinish();  // make the cost visible here, where it is budgeted
-    last_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    last_draw_ = Clock::now();
-    drawn_serial_ = app.shown_serial();
-    drawn_key_ = key;
-    hq_ = hq;
-    valid_ = true;
-    ++draws_;
-    return true;
-  }
-
-  // Copy the view into the window's back buffer with its lower-left corner at (x, y).
-  void blit_to_window(int x, int y) const { target_.blit_to_window(x, y); }
-  bool valid() const { return valid_; }
-  double last_ms() const { return last_ms_; }
-  long draws() const { return draws_; }
-
- private:
-  static std::string view_key(const GuiApp& app) {
-    const render::Camera& c = app.camera;
-    const render::ViewOptions& o = app.view_options;
-    char b[400];
-    std::snprintf(b, sizeof b, "%g %g %g %g %g %g %g %d %d %d %d %d %d %d %d %d %g %g %d %g %d %d %g %g %d %d",
-                  c.target[0], c.target[1], c.target[2], c.distance_m, c.yaw_deg, c.pitch_deg, c.fov_y_deg, int(o.view),
-                  int(o.field), int(o.map), o.mirror, o.show_projectile, o.show_clamps, o.section_cut, o.show_caption,
-                  o.show_colorbar, o.range_min, o.range_max, int(o.yarn_geometry), app.playing_render_scale,
-                  o.highlight_element, o.highlight_crossing, o.highlight_mirror[0], o.highlight_mirror[1],
-                  o.show_scale_bar, o.show_axes);
-    return b;
-  }
-
-  render::RenderTarget target_;
-  bool valid_ = false, hq_ = false;
-  std::uint64_t drawn_serial_ = ~std::uint64_t(0);
-  std::string drawn_key_;
-  std::chrono::steady_clock::time_point last_draw_{}, last_change_{};
-  double last_ms_ = 0;
-  long draws_ = 0;
-};
-
 // The main menu bar across the top of the window.
 void draw_menu_bar(GuiApp& app, gui::CompareMode& compare) {
   if (!ImGui::BeginMainMenuBar()) return;
@@ -515,12 +431,13 @@ void initial_window_size(bool given, int* w, int* h) {
   *h = std::max(480, std::min(*h, int(mh * 0.9)));
 }
 
-GuiApp* g_app_for_drop = nullptr;
-void on_drop(GLFWwindow*, int count, const char** paths) {
-  if (g_app_for_drop && count > 0 && paths[0]) {
-    g_app_for_drop->open_path = paths[0];
-    gui::open_scene(*g_app_for_drop, paths[0]);
-    g_app_for_drop->show_open = true;
+// A file dropped on the window: open it (the window's user pointer is the app).
+void on_drop(GLFWwindow* window, int count, const char** paths) {
+  auto* app = static_cast<GuiApp*>(glfwGetWindowUserPointer(window));
+  if (app && count > 0 && paths[0]) {
+    app->open_path = paths[0];
+    gui::open_scene(*app, paths[0]);
+    app->show_open = true;
   }
 }
 
@@ -639,8 +556,8 @@ int cmd_gui(const Args& args) {
       app.layout_check = std::getenv("RAVEL_LAYOUT_CHECK") != nullptr;
       app.ui_scale = ui_scale;
       gui::CompareMode compare;
-      g_compare = &compare;
-      g_app_for_drop = &app;
+      app.compare = &compare;
+      glfwSetWindowUserPointer(window, &app);
       glfwSetDropCallback(window, on_drop);
       app.worker = &worker;
       worker.queue_frames(true);  // the timeline keeps every published frame
@@ -655,7 +572,7 @@ int cmd_gui(const Args& args) {
       }
       worker.sync(app.view);
 
-      ViewCache view_cache;
+      gui::SingleRunMode single;
       const auto t0 = std::chrono::steady_clock::now();
       const double ui_cpu0 = cpu_seconds(CLOCK_THREAD_CPUTIME_ID), process_cpu0 = cpu_seconds(CLOCK_PROCESS_CPUTIME_ID);
       auto last_frame_end = t0;
@@ -670,12 +587,14 @@ int cmd_gui(const Args& args) {
         const auto frame_start = std::chrono::steady_clock::now();
         glfwPollEvents();
         ++frame;
+        // The active mode: the single run, or compare / demos while a comparison runs.
+        gui::Mode& mode = compare.active() ? static_cast<gui::Mode&>(compare) : single;
         worker.sync(app.view);
         gui::update_timeline(app);
         // Scripted actions run at their script frame; `wait` holds the script frame (not the
         // UI) until the run is paused or ended and no export or study is running.
         if (app.script_waiting && app.view.state != WorkerState::running && !gui::export_running(app) &&
-            !gui::studies_running(app) && !worker.busy())
+            !gui::studies_running(app) && !worker.busy() && !compare.busy())
           app.script_waiting = false;
         if (!app.script_waiting) {
           ++script_frame;
@@ -705,7 +624,7 @@ int cmd_gui(const Args& args) {
         app.bottom_h = std::clamp(ds.y * 0.34f, fs * 13.0f, fs * 25.0f);
         app.status_w = std::clamp(ds.x * 0.22f, fs * 18.0f, fs * 24.0f);
         app.timeline_h =
-            compare.active() ? 0.0f : ImGui::GetFrameHeight() + 2 * ImGui::GetStyle().WindowPadding.y + 2.0f;
+            mode.has_time_slider() ? ImGui::GetFrameHeight() + 2 * ImGui::GetStyle().WindowPadding.y + 2.0f : 0.0f;
         app.view_x = app.left_w;
         app.view_y = app.menu_h;
         app.view_w = std::max(1.0f, ds.x - app.left_w);
@@ -715,17 +634,12 @@ int cmd_gui(const Args& args) {
         handle_input(app);
         const bool dragging = !ImGui::GetIO().WantCaptureMouse &&
                               (ImGui::IsMouseDown(0) || ImGui::IsMouseDown(1) || ImGui::IsMouseDown(2));
-        app.mode_field = compare.active() ? compare.field() : std::string();
+        app.mode_field = mode.field();
         gui::draw_left_panel(app);
-        compare.update();
-        if (compare.active()) {
-          compare.draw_panels(app);  // caption, controls and the runs' velocity chart
-        } else {
-          gui::draw_timeline_bar(app);
-          gui::draw_charts_panel(app);
-          gui::draw_status_panel(app);
-          gui::draw_picked_window(app);
-        }
+        mode.update(app);
+        // A comparison may have started or ended in the left panel or a menu.
+        gui::Mode& shown_mode = compare.active() ? static_cast<gui::Mode&>(compare) : single;
+        shown_mode.draw_panels(app);
         compare.draw_dialogs(app);
         gui::draw_keys_window(app);
         gui::draw_open_window(app);
@@ -749,9 +663,8 @@ int cmd_gui(const Args& args) {
         }
         const bool shot_due = app.screenshot_requested || (frames > 0 && frame >= frames && !screenshot.empty());
         const auto v0 = std::chrono::steady_clock::now();
-        if (!compare.active())
-          view_cache.update(renderer, app, vw, vh, overlay_scale,
-                            dragging || (app.live && app.view.state == WorkerState::running), shot_due);
+        shown_mode.render_view(app, renderer, vw, vh, overlay_scale,
+                               dragging || (app.live && app.view.state == WorkerState::running), shot_due);
         gui::step_export(app, renderer, vw, vh);
         view_ms_total += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - v0).count();
         ImGui::Render();
@@ -761,13 +674,7 @@ int cmd_gui(const Args& args) {
         // The cached 3D view is copied into the window 1:1 (a blit: no shader or blending,
         // slightly cheaper under llvmpipe than ImGui drawing it as a textured quad); the
         // panels are drawn over it.
-        if (compare.active()) {  // split viewports of the compared runs
-          compare.draw_views(renderer, int(app.view_x * sx), fb_h - int((app.view_y + app.view_h) * sy), vw, vh,
-                             overlay_scale);
-        } else if (view_cache.valid()) {
-          const int dx = int(app.view_x * sx), dy = fb_h - int((app.view_y + app.view_h) * sy);
-          view_cache.blit_to_window(dx, dy);
-        }
+        shown_mode.blit_view(int(app.view_x * sx), fb_h - int((app.view_y + app.view_h) * sy));
         ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 
         const auto now = std::chrono::steady_clock::now();
@@ -827,9 +734,9 @@ int cmd_gui(const Args& args) {
             "%ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f, "
             "load %.2f\n",
             frame, wall, double(frame) / wall, worst_frame_ms, playing_s > 0 ? double(playing_frames) / playing_s : 0.0,
-            playing_s, 1e3 * ui_cpu / double(frame), 100.0 * process_cpu / wall, view_cache.draws(),
-            view_ms_total / double(std::max(1L, view_cache.draws())), ImGui::GetIO().MetricsRenderVertices,
-            sim_at_end_us, app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
+            playing_s, 1e3 * ui_cpu / double(frame), 100.0 * process_cpu / wall, single.draws(),
+            view_ms_total / double(std::max(1L, single.draws())), ImGui::GetIO().MetricsRenderVertices, sim_at_end_us,
+            app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }
       if (app.layout_check) {
@@ -846,9 +753,9 @@ int cmd_gui(const Args& args) {
         }
       }
       if (app.script_failed && exit_code == exit_ok) exit_code = exit_failure;
-      g_app_for_drop = nullptr;
+      glfwSetWindowUserPointer(window, nullptr);
       worker.request_exit();
-      view_cache.release();
+      single.release();
     }  // worker joined, renderer destroyed with the context current
 
     ImGui_ImplOpenGL3_Shutdown();

@@ -10,7 +10,9 @@
 // gui_demos.cpp (demos and compare, a mode of its own).
 #pragma once
 
+#include <cstdint>
 #include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,8 +24,10 @@
 
 namespace ravel::app::gui {
 
-struct ExportJob;      // gui_export.cpp
-struct StudiesWindow;  // gui_studies.cpp
+struct ExportJob;        // gui_export.cpp
+struct StudiesWindow;    // gui_studies.cpp
+class CompareMode;       // gui_demos.h
+struct StabilityWindow;  // gui_jobs.h (with the studies' ImGui charts)
 
 // What the user picked in the 3D view (render/picking.h): an element or a crossing of the
 // modelled part, seen in one mirrored copy.
@@ -47,6 +51,7 @@ struct GuiApp {
   // Time travel: the frames kept of the current run, and whether the view follows the run
   // (live) or shows a kept frame (scrubbing; the run goes on behind it).
   Timeline timeline;
+  std::uint64_t timeline_serial = 0;  // the newest frame the timeline has seen
   bool live = true;
   std::size_t scrub_index = 0;
   Frame scrub_frame;               // timeline.frame(scrub_index) while !live
@@ -94,8 +99,18 @@ struct GuiApp {
   bool show_open = false;
   bool show_keys = false;  // the "All scene keys" window
 
+  // The "Scene keys" window: the filter, the last refused edit, the field being typed in.
+  std::string keys_filter, keys_error, keys_active;
+  std::map<std::string, std::string> keys_editing;
+
+  // The 3D view's mouse: a drag that started in the view, where it started, how far it went.
+  bool dragging = false;
+  float press_x = 0, press_y = 0, drag_px = 0;
+
   std::unique_ptr<ExportJob> export_job;
   std::unique_ptr<StudiesWindow> studies;
+  std::unique_ptr<StabilityWindow> stability;
+  CompareMode* compare = nullptr;  // the compare / demos mode (owned by the main loop)
 
   bool show_help = false;
   bool quit = false;

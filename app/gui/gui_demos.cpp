@@ -157,6 +157,13 @@ double CompareMode::next_stop_s() const {
   return -1;
 }
 
+bool CompareMode::busy() const {
+  if (!active() || at_key_ || !playing_) return false;
+  for (const WorkerView& v : views_)
+    if (!run_done(v) && v.frame.time_s < demo_.end_time_us * 1e-6 - 0.5 * v.summary.dt_s) return true;
+  return false;
+}
+
 void CompareMode::scrub_to(double t_s) {
   if (!active()) return;
   scrubbing_ = true;
@@ -313,7 +320,11 @@ void CompareMode::draw_panels(GuiApp& app) {
   ImGui::End();
 }
 
-void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale) {
+void CompareMode::blit_view(int x, int y) {
+  if (cache_->valid) cache_->target.blit_to_window(x, y);
+}
+
+void CompareMode::render_view(GuiApp&, render::Renderer& renderer, int w, int h, float ui_scale, bool, bool) {
   if (!active() || w <= 0 || h <= 0) return;
   Cache& c = *cache_;
   c.resize(w, h);
@@ -324,7 +335,11 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
   render::ViewOptions o;
   render::parse_view_preset(demo_.view, &o.view);
   render::parse_color_field(demo_.field, &o.field);
-  o.ui_scale = ui_scale;
+  // Narrow panes: smaller overlay text, and no axes or scale bar (the run's title sits in
+  // the lower left; the scale is the same in every pane).
+  const int pane_w = w / (n == 4 ? 2 : std::max(1, n));
+  o.ui_scale = std::clamp(std::round(float(pane_w) / 320.0f), 1.0f, std::max(1.0f, ui_scale));
+  o.show_axes = o.show_scale_bar = false;
   o.yarn_geometry = render::YarnGeometry::ribbons;
   bool changed = !c.valid;
   // A run's serial: its worker's frame, or the scrubbed frame while the slider holds them.
@@ -360,7 +375,7 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
         title.y = -10;
         title.lines = {demo_.runs[i].label};
         title.colors = {render::Vec3{1.0f, 0.75f, 0.35f}};
-        title.scale = ui_scale + 1;
+        title.scale = o.ui_scale + 1;
         c.annotator->draw(c.cameras[i], lines, {title}, vx, gl_y, vw, vh);
         c.serials[i] = serial(i);
       }
@@ -369,7 +384,6 @@ void CompareMode::draw_views(render::Renderer& renderer, int x, int y, int w, in
       c.last_draw = now;
     }
   }
-  if (c.valid) c.target.blit_to_window(x, y);
 }
 
 }  // namespace ravel::app::gui

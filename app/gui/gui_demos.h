@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "demos.h"
+#include "modes.h"
 #include "sim_worker.h"
 #include "timeline.h"
 
@@ -26,7 +27,7 @@ namespace ravel::app::gui {
 
 struct GuiApp;
 
-class CompareMode {
+class CompareMode : public Mode {
  public:
   CompareMode();
   ~CompareMode();
@@ -46,14 +47,19 @@ class CompareMode {
   void resume();  // "Continue" past a key frame
   void set_playing(bool p) { playing_ = p; }
 
-  // Once per UI frame: sync the workers, advance the shared clock, gate the workers.
+  // Mode: once per UI frame sync the workers, advance the shared clock, gate the workers;
+  // the panels (caption and controls over the chart area, the velocity chart of the runs);
+  // the runs side by side in a render target, redrawn when they publish new frames.
+  bool has_time_slider() const override { return false; }  // its slider is in its panel
+  std::string field() const override { return demo_.field; }
+  void update(GuiApp& app) override { update(); }
   void update();
-  // The panels of compare mode (caption and controls over the chart area, the velocity
-  // chart of the runs). Call instead of the app's charts panel.
-  void draw_panels(GuiApp& app);
-  // Draw the runs side by side into the window's framebuffer rectangle (GL window
-  // coordinates, y up) from a cached texture, redrawn when the runs publish new frames.
-  void draw_views(render::Renderer& renderer, int x, int y, int w, int h, float ui_scale);
+  void draw_panels(GuiApp& app) override;
+  void render_view(GuiApp& app, render::Renderer& renderer, int w, int h, float overlay_scale, bool busy,
+                   bool force_hq) override;
+  void blit_view(int x, int y) override;
+  void scrub_to(GuiApp&, double t_s) override { scrub_to(t_s); }
+  void go_live(GuiApp&) override { go_live(); }
 
   // Time travel in step: every run keeps its frames (a Timeline each), and the slider in
   // the compare panel (or scrub_to) shows all runs at the same earlier time.
@@ -64,9 +70,11 @@ class CompareMode {
   const Frame& shown(std::size_t i) const { return scrubbing_ ? scrub_frames_[i] : views_[i].frame; }
 
   double clock_s() const { return clock_.time(); }
-  const std::string& field() const { return demo_.field; }
   int key_index() const { return key_; }
   bool at_key() const { return at_key_; }
+  // Running: active, playing and not held at a key frame with a run still going (a
+  // scripted `wait` waits for this to end).
+  bool busy() const;
   const std::vector<WorkerView>& views() const { return views_; }
 
  private:

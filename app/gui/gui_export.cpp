@@ -34,12 +34,6 @@ std::vector<double> kept_times(const Timeline& tl) {
   return t;
 }
 
-// The kept frames' times when the export started (the timeline may thin while it runs).
-std::vector<double>& job_times() {
-  static std::vector<double> t;
-  return t;
-}
-
 bool start_job(GuiApp& app, ExportJob::Kind kind, const std::string& dir) {
   if (export_running(app)) {
     set_notice(app, "an export is running; wait for it to finish", true);
@@ -59,8 +53,8 @@ bool start_job(GuiApp& app, ExportJob::Kind kind, const std::string& dir) {
   job->kind = kind;
   job->dir = dir;
   job->run_id = app.view.run_id;
-  job_times() = kept_times(app.timeline);
-  job->total = job_times().size();
+  job->times = kept_times(app.timeline);
+  job->total = job->times.size();
   job->camera = app.camera;
   job->options = app.view_options;
   job->options.render_scale = 1.0f;
@@ -132,7 +126,7 @@ void step_export(GuiApp& app, render::Renderer& renderer, int, int) {
               " frames written";
     j.done = true;
   }
-  const auto& times = job_times();
+  const auto& times = j.times;
   const int per_frame = j.kind == ExportJob::Kind::vtk ? 4 : 1;
   for (int k = 0; k < per_frame && !j.done && j.next < j.total; ++k, ++j.next) {
     const std::size_t i = app.timeline.index_at(times[j.next]);

@@ -14,6 +14,10 @@
 #include "render/render_target.h"
 #include "limit.h"
 #include "sweep_runner.h"
+#ifdef RAVEL_HAVE_STUDIES_IMGUI
+#include "chart_imgui.h"
+#include "stability.h"
+#endif
 
 namespace ravel::app::gui {
 
@@ -21,6 +25,7 @@ namespace ravel::app::gui {
 struct ExportJob {
   enum class Kind { vtk, images } kind = Kind::vtk;
   std::string dir;
+  std::vector<double> times;        // the kept frames' times when it started (the timeline may thin)
   std::size_t next = 0, total = 0;  // kept frames done / to do
   long run_id = -1;                 // the run whose frames these are
   std::vector<PvdEntry> entries;    // vtk: the series so far
@@ -71,5 +76,35 @@ struct StudiesWindow {
   std::string limit_error;
   LimitRunner limit;
 };
+
+#ifdef RAVEL_HAVE_STUDIES_IMGUI
+// "Stability map" window (docs/tradeoff.md): loads DIR/stability.csv written by
+// `ravel stability`, or runs the small time-step map of the current scene on a background
+// thread (studies::run_stability, into <export folder>/stability), and draws each map
+// with the ImGui chart backend (the same grid chart as the PNG/SVG files).
+struct StabilityWindow {
+  bool open = false;
+  bool env_checked = false;  // RAVEL_STABILITY_CSV looked at
+  char path[512] = "stability/stability.csv";
+  std::vector<std::pair<std::string, studies::Chart>> charts;
+  std::vector<std::string> sentences;
+  std::string message;
+  std::thread worker;
+  std::atomic<bool> running{false}, interrupt{false};
+  std::string result_csv;  // set by the worker before running = false
+  ~StabilityWindow() {
+    interrupt = true;
+    if (worker.joinable()) worker.join();
+  }
+  void load_text(const std::string& text, const std::string& from) {
+    const auto cells = studies::parse_stability_csv(text);
+    charts = studies::stability_charts(cells, from);
+    message = cells.empty() ? from + ": no cells" : std::to_string(cells.size()) + " cells from " + from;
+  }
+};
+
+#else
+struct StabilityWindow {};
+#endif
 
 }  // namespace ravel::app::gui

@@ -87,9 +87,10 @@ void draw_keys_window(GuiApp& app) {
     ImGui::End();
     return;
   }
-  static std::string filter, error;
-  static std::map<std::string, std::string> editing;  // text being typed, per key
-  static std::string active_key;                      // the field being typed in
+  std::string& filter = app.keys_filter;
+  std::string& error = app.keys_error;
+  std::map<std::string, std::string>& editing = app.keys_editing;  // text being typed, per key
+  std::string& active_key = app.keys_active;                       // the field being typed in
   ImGui::TextWrapped(
       "Every key of a scene file, as `ravel keys` lists them. Edits go into the draft (Enter to apply a typed value); "
       "Restart runs it.");

@@ -10,6 +10,7 @@
 
 #include "gui_app.h"
 #include "gui_charts.h"
+#include "gui_jobs.h"
 #include "results.h"
 #ifdef RAVEL_HAVE_STUDIES_IMGUI
 #include <atomic>
@@ -70,14 +71,14 @@ std::string run_key(Scene s) {
   return scene_to_toml(s);
 }
 
-// The layout check (RAVEL_LAYOUT_CHECK) opens every section, so every control is laid out.
-bool g_force_open = false;
-bool header(const char* label, ImGuiTreeNodeFlags flags = 0) {
-  if (g_force_open) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+// The layout check (RAVEL_LAYOUT_CHECK, GuiApp::layout_check) opens every section and tree
+// node, so every control is laid out and measured.
+bool header(const GuiApp& app, const char* label, ImGuiTreeNodeFlags flags = 0) {
+  if (app.layout_check) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
   return ImGui::CollapsingHeader(label, flags);
 }
-bool tree_node(const char* label) {
-  if (g_force_open) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+bool tree_node(const GuiApp& app, const char* label) {
+  if (app.layout_check) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
   return ImGui::TreeNode(label);
 }
 
@@ -211,7 +212,7 @@ bool scene_section(GuiApp& app) {
     s.yarn.material = mat == 0 ? Material::zener : Material::elastic;
     changed = true;
   }
-  if (tree_node("Weave and crossings")) {
+  if (tree_node(app, "Weave and crossings")) {
     changed |= input_si("L0 (mm)", &s.fabric.spacing_m, 1e3, "%.4g");
     help_marker("L0: horizontal node spacing, the yarn pitch (fabric.spacing_mm). Enter to apply.");
     changed |= input_si("L1 (mm)", &s.fabric.crossing_gap_m, 1e3, "%.4g");
@@ -238,7 +239,7 @@ bool scene_section(GuiApp& app) {
     ImGui::EndDisabled();
     ImGui::TreePop();
   }
-  if (s.yarn.material == Material::zener && tree_node("Zener constants")) {
+  if (s.yarn.material == Material::zener && tree_node(app, "Zener constants")) {
     changed |= input_si("K1 (GPa)", &s.yarn.k1_pa, 1e-9, "%.2f");
     help_marker("Zener spring in series: the instantaneous modulus (Eq 23). Enter to apply.");
     changed |= input_si("K2 (GPa)", &s.yarn.k2_pa, 1e-9, "%.2f");
@@ -266,7 +267,7 @@ bool projectile_section(GuiApp& app) {
   ImGui::TextDisabled("impact energy %.1f J", 0.5 * p.mass_kg * p.velocity_mps * p.velocity_mps);
   changed |= slider_si("friction mu_p", &p.friction, 1, 0, 1, "%.2f");
   help_marker("Projectile-yarn Coulomb friction (Eq 20-22). The paper uses 0.27.");
-  if (tree_node("Strike point and obliquity")) {
+  if (tree_node(app, "Strike point and obliquity")) {
     changed |= slider_si("offset x (mm)", &p.offset_x_m, 1e3, -30, 30, "%.2f");
     changed |= slider_si("offset y (mm)", &p.offset_y_m, 1e3, -30, 30, "%.2f");
     help_marker(
@@ -475,36 +476,12 @@ void export_section(GuiApp& app) {
 }
 
 #ifdef RAVEL_HAVE_STUDIES_IMGUI
-// "Stability map" window (docs/tradeoff.md): loads DIR/stability.csv written by
-// `ravel stability`, or runs the small time-step map of the current scene on a background
-// thread (studies::run_stability, into <export folder>/stability), and draws each map
-// with the ImGui chart backend (the same grid chart as the PNG/SVG files).
-struct StabilityWindow {
-  bool open = false;
-  char path[512] = "stability/stability.csv";
-  std::vector<std::pair<std::string, studies::Chart>> charts;
-  std::vector<std::string> sentences;
-  std::string message;
-  std::thread worker;
-  std::atomic<bool> running{false}, interrupt{false};
-  std::string result_csv;  // set by the worker before running = false
-  ~StabilityWindow() {
-    interrupt = true;
-    if (worker.joinable()) worker.join();
-  }
-  void load_text(const std::string& text, const std::string& from) {
-    const auto cells = studies::parse_stability_csv(text);
-    charts = studies::stability_charts(cells, from);
-    message = cells.empty() ? from + ": no cells" : std::to_string(cells.size()) + " cells from " + from;
-  }
-};
-
-StabilityWindow& stability_window() {
-  static StabilityWindow w;
+StabilityWindow& stability_window(GuiApp& app) {
+  if (!app.stability) app.stability = std::make_unique<StabilityWindow>();
+  StabilityWindow& w = *app.stability;
   // RAVEL_STABILITY_CSV=FILE opens the window on that file at start (screenshots, tests).
-  static bool from_env = false;
-  if (!from_env) {
-    from_env = true;
+  if (!w.env_checked) {
+    w.env_checked = true;
     if (const char* p = std::getenv("RAVEL_STABILITY_CSV")) {
       std::snprintf(w.path, sizeof w.path, "%s", p);
       w.open = true;
@@ -518,15 +495,15 @@ StabilityWindow& stability_window() {
   return w;
 }
 
-void stability_button(GuiApp&) {
-  StabilityWindow& w = stability_window();
+void stability_button(GuiApp& app) {
+  StabilityWindow& w = stability_window(app);
   if (ImGui::Button("Stability map", ImVec2(ImGui::GetContentRegionAvail().x, 0))) w.open = !w.open;
   if (ImGui::IsItemHovered())
     ImGui::SetTooltip("Where the methods fail: load stability.csv from 'ravel stability', or map dt_factor here");
 }
 
 void draw_stability_window(GuiApp& app) {
-  StabilityWindow& w = stability_window();
+  StabilityWindow& w = stability_window(app);
   if (!w.open) return;
   if (!w.running && w.worker.joinable()) {  // a map run finished: show it
     w.worker.join();
@@ -643,7 +620,6 @@ void set_draft_value(GuiApp& app, const std::string& key_value) {
 }
 
 void draw_left_panel(GuiApp& app) {
-  g_force_open = app.layout_check;
   const ImGuiIO& io = ImGui::GetIO();
   ImGui::SetNextWindowPos(ImVec2(0, app.menu_h));
   ImGui::SetNextWindowSize(ImVec2(app.left_w, io.DisplaySize.y - app.menu_h));
@@ -662,10 +638,10 @@ void draw_left_panel(GuiApp& app) {
   // Widgets fill the panel but leave room for their label (and a help marker) on the right.
   ImGui::PushItemWidth(-ImGui::GetFontSize() * 9.0f);
   bool changed = false;
-  if (header("Scene", ImGuiTreeNodeFlags_DefaultOpen)) changed |= scene_section(app);
-  if (header("Projectile", ImGuiTreeNodeFlags_DefaultOpen)) changed |= projectile_section(app);
-  if (header("Inter-yarn friction", ImGuiTreeNodeFlags_DefaultOpen)) changed |= friction_section(app);
-  if (header("Solver")) changed |= solver_section(app);
+  if (header(app, "Scene", ImGuiTreeNodeFlags_DefaultOpen)) changed |= scene_section(app);
+  if (header(app, "Projectile", ImGuiTreeNodeFlags_DefaultOpen)) changed |= projectile_section(app);
+  if (header(app, "Inter-yarn friction", ImGuiTreeNodeFlags_DefaultOpen)) changed |= friction_section(app);
+  if (header(app, "Solver")) changed |= solver_section(app);
   ImGui::PopItemWidth();
   if (!app.scene_error.empty()) {
     ImGui::PushTextWrapPos(0);
@@ -679,8 +655,8 @@ void draw_left_panel(GuiApp& app) {
   if (app.auto_restart && ImGui::IsMouseReleased(ImGuiMouseButton_Left) &&
       run_key(app.draft) != run_key(app.view.scene))
     restart_with_draft(app);
-  if (header("View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
-  if (header("Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
+  if (header(app, "View", ImGuiTreeNodeFlags_DefaultOpen)) view_section(app);
+  if (header(app, "Export and overlays", ImGuiTreeNodeFlags_DefaultOpen)) export_section(app);
   {
     const float full = ImGui::GetContentRegionAvail().x;
     const float half = (full - ImGui::GetStyle().ItemSpacing.x) / 2;

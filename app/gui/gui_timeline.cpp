@@ -28,11 +28,10 @@ void GuiApp::scrub_to(double t_s) {
 }
 
 void update_timeline(GuiApp& app) {
-  static std::uint64_t last_serial = 0;
   if (app.view.run_id != app.timeline.run_id()) {
     app.timeline.reset(app.view.run_id);
     app.live = true;
-    last_serial = 0;
+    app.timeline_serial = 0;
     // The same scene keeps its numbering: a pick survives Reset; a new scene may not have it.
     if (app.picked.element >= int(app.view.frame.elem_a.size()) ||
         app.picked.crossing >= int(app.view.frame.crossing_warp_node.size()))
@@ -41,9 +40,9 @@ void update_timeline(GuiApp& app) {
   // Every frame the worker published since the last sync (queue_frames), then the newest.
   for (const auto& [f, step] : app.view.new_frames) app.timeline.add(f, step);
   app.view.new_frames.clear();
-  if (app.view.frame_serial != last_serial && !app.view.frame.node_pos.empty()) {
+  if (app.view.frame_serial != app.timeline_serial && !app.view.frame.node_pos.empty()) {
     app.timeline.add(app.view.frame, app.view.step_count);
-    last_serial = app.view.frame_serial;
+    app.timeline_serial = app.view.frame_serial;
   }
   // Thinning may have dropped the frame on show: keep showing the nearest one kept.
   if (!app.live && !app.timeline.empty() && app.scrub_index < app.timeline.size() &&

@@ -176,6 +176,18 @@ print("the app's sweep equals ravel sweep:", [r["residual_velocity_mps"] for r i
 EOF
   ;;
 
+compare)
+  # A demo's three runs held at its first key frame (20 us), then all moved back to 15 us
+  # together: every pane's caption (and so every run's kept frame) shows 15 +- 0.5 us.
+  run_gui 1280 720 --frames 8 --do 1:demo:friction --do 3:wait --do 4:scrub:15 --screenshot "$out/compare.png"
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  grep -q "compare runs shown at t = 15.000000 us" log.txt || fail "the compare runs were not scrubbed"
+  n=$(grep -c "compare run .* shows t = 1[45]\.[0-9]* us" log.txt || true)
+  [ "$n" -eq 3 ] || fail "$n of 3 runs show a kept frame near 15 us"
+  "$python" "$here/check_screenshot.py" compare.png 1280 720
+  ;;
+
 *)
   echo "unknown case $case_name"
   exit 2
