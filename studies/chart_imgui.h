@@ -17,14 +17,3 @@ namespace ravel::studies {
 void draw_chart_imgui(const Chart& chart, ImVec2 size = ImVec2(0, 0));
 
 }  // namespace ravel::studies
-
-namespace ravel::studies {
-
-class SweepRunner;
-
-// A sweep panel for the app: --vary lines, output folder, jobs, Start / Cancel, a progress
-// bar with cases per hour, and the live charts of the cases done so far. `scene_path` and
-// `overrides` are the app's current scene (a file, or "" for the default) and its edits.
-void draw_sweep_panel(SweepRunner& runner, const std::string& scene_path, const std::vector<std::string>& overrides);
-
-}  // namespace ravel::studies
