@@ -45,11 +45,14 @@ void SingleRunMode::render_view(GuiApp& app, render::Renderer& renderer, int w, 
   const std::string key = view_key(app);
   const bool new_frame = app.shown_serial() != drawn_serial_;
   const bool view_changed = key != drawn_key_;
+  // Scrubbing is drawn like a playing run: cheaper yarns and at most the redraw budget, so the
+  // slider stays smooth under a software GL; full quality once the slider rests.
+  if (new_frame && !app.live) busy = true;
   if (busy || new_frame || view_changed) last_change_s_ = now;
   const bool still = now - last_change_s_ > 0.25;
   // Budget: at most about a quarter of wall time on the fabric while a run plays.
   const double min_gap_s = std::max(0.066, 3.0 * last_ms_ * 1e-3);
-  bool draw = !valid_ || view_changed || force_hq || (new_frame && !app.live);  // scrubbing: at once
+  bool draw = !valid_ || view_changed || force_hq;
   if (!draw && new_frame && now - last_draw_s_ >= min_gap_s) draw = true;
   if (!draw && still && !hq_) draw = true;  // settle to full quality
   if (!draw || app.shown().node_pos.empty()) return;
