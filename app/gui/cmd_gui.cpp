@@ -732,11 +732,12 @@ int cmd_gui(const Args& args) {
             "ravel gui: %ld frames in %.2f s (%.1f fps, slowest %.0f ms; while playing %.1f fps over "
             "%.1f s; UI thread CPU %.1f ms per frame, process CPU %.0f %% of one core), 3D view drawn "
             "%ld times (%.0f ms each), %d UI vertices, simulated time %.2f us, run %ld %s, mu %.2f, "
-            "load %.2f\n",
+            "load %.2f; kept %zu frames, %.0f MB\n",
             frame, wall, double(frame) / wall, worst_frame_ms, playing_s > 0 ? double(playing_frames) / playing_s : 0.0,
             playing_s, 1e3 * ui_cpu / double(frame), 100.0 * process_cpu / wall, single.draws(),
             view_ms_total / double(std::max(1L, single.draws())), ImGui::GetIO().MetricsRenderVertices, sim_at_end_us,
-            app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1);
+            app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1, app.timeline.size(),
+            double(app.timeline.bytes()) / (1 << 20));
         if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }
       if (app.layout_check) {
