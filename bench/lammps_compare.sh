@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# ravel against LAMMPS on the same fabric, one core each, in one run (issue 21's speed peer).
+#
+# LAMMPS (Debian's `lammps`, installed here if missing) runs the default scene's quarter
+# fabric as a bare spring network: 72 x 72 crossings, two nodes per crossing (warp and weft
+# yarn, L1 apart), harmonic bonds of the yarns' instantaneous stiffness K1 A / L along each
+# yarn, the clamped edge fixed, the symmetry planes held, the 12 mm sphere driven through
+# it at 260 m/s as a moving repulsive region, velocity Verlet at ravel's time step. No
+# friction, crossing contact, bending, viscoelasticity, failure or energy ledger: a floor
+# for what an explicit network of this size costs per step, not the same physics. ravel
+# runs the real default scene to the same simulated time (102 us, 1672 steps) on one
+# thread. Both are timed as whole processes and by their own loop timers.
+#
+# usage: bench/lammps_compare.sh [BUILD_DIR]        prints CSV on stdout
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+ravel=$build/app/ravel
+[ -x "$ravel" ] || { echo "no $ravel: build first (scripts/setup)" >&2; exit 2; }
+if ! command -v lmp >/dev/null 2>&1; then
+  echo "lammps_compare: installing Debian's lammps" >&2
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends lammps >/dev/null
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+# The quarter fabric as a LAMMPS data file (SI units), generated like core/model.cpp lays it out.
+python3 - "$work" <<'EOF'
+import math, sys
+work = sys.argv[1]
+L0, L1 = 0.844e-3, 0.2e-3
+n = 2 * int(0.060 / L0 // 1) + 1        # yarns per direction in the whole fabric (143)
+h = n // 2                              # quarter: grid indices 0..h (72 per direction)
+m = 9.4e-8                              # node mass, kg
+E, A = 7.28e10, 7.64e-8                 # K1 (instantaneous modulus), yarn cross-section
+atoms, bonds = [], []
+def nid(fam, i, j): return 1 + fam * (h + 1) ** 2 + i * (h + 1) + j
+for fam in (0, 1):                      # 0 warp (along y), 1 weft (along x)
+    for i in range(h + 1):
+        for j in range(h + 1):
+            up = (i + j) % 2 == 0       # warp on top where I + J is even
+            z = (0.5 if up == (fam == 0) else -0.5) * L1
+            atoms.append((nid(fam, i, j), 1, i * L0, j * L0, z))
+for i in range(h + 1):
+    for j in range(h):
+        bonds.append((nid(0, i, j), nid(0, i, j + 1)))   # warp yarn I, along y
+        bonds.append((nid(1, j, i), nid(1, j + 1, i)))   # weft yarn J, along x
+with open(work + "/fabric.data", "w") as f:
+    f.write("ravel quarter fabric\n\n%d atoms\n%d bonds\n1 atom types\n1 bond types\n\n" % (len(atoms), len(bonds)))
+    f.write("-0.001 0.0615 xlo xhi\n-0.001 0.0615 ylo yhi\n-0.08 0.02 zlo zhi\n\nMasses\n\n1 %.6g\n\nAtoms # bond\n\n" % m)
+    for a in atoms:
+        f.write("%d 1 %d %.9g %.9g %.9g\n" % (a[0], a[1], a[2], a[3], a[4]))
+    f.write("\nBonds\n\n")
+    for k, (a, b) in enumerate(bonds):
+        f.write("%d 1 %d %d\n" % (k + 1, a, b))
+Lel = math.sqrt(L0 ** 2 + L1 ** 2)
+k = E * A / Lel                         # N/m; LAMMPS harmonic: E = K (r - r0)^2, K = k / 2
+with open(work + "/params.in", "w") as f:
+    f.write("variable K equal %.9g\nvariable r0 equal %.9g\nvariable xclamp equal %.9g\n" % (k / 2, Lel, h * L0 - 1e-9))
+print(len(atoms), file=open(work + "/nodes", "w"))
+EOF
+cat >"$work/in.fabric" <<'EOF'
+units si
+atom_style bond
+boundary f f f
+read_data fabric.data
+include params.in
+bond_style harmonic
+bond_coeff 1 ${K} ${r0}
+pair_style none
+variable xc atom x>${xclamp}
+group clamp variable xc
+variable px atom x<1e-9
+group plane_x variable px
+variable py atom y<1e-9
+group plane_y variable py
+# The sphere: R = 6 mm, its lowest point at the fabric at t = 0, moving down at 260 m/s; a
+# node inside it is pushed out with F = K (R - r)^2 (LAMMPS' spherical indenter).
+variable zc equal 0.0061-260*step*dt
+fix push all indent 1e12 sphere 0 0 v_zc 0.006 side out units box
+fix verlet all nve
+fix clamp clamp setforce 0 0 0
+fix px plane_x setforce 0 NULL NULL
+fix py plane_y setforce NULL 0 NULL
+timestep 6.099461334530171e-08
+thermo 0
+thermo_style custom step f_push[3]
+run 1672
+EOF
+nodes=$(cat "$work/nodes")
+steps=1672
+now() { date +%s.%N; }
+t0=$(now)
+(cd "$work" && lmp -in in.fabric -log lammps.log -screen none)
+t1=$(now)
+lammps_loop=$(sed -n 's/^Loop time of \([0-9.e+-]*\) on .*/\1/p' "$work/lammps.log" | tail -1)
+t2=$(now)
+"$ravel" run --set solver.end_time_us=102 --threads 1 --out "$work/ravel" --quiet >/dev/null
+t3=$(now)
+ravel_loop=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['wall_time_s'])")
+ravel_nodes=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['modelled_node_count'])")
+ravel_steps=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['step_count'])")
+python3 - "$nodes" "$steps" "$t0" "$t1" "$lammps_loop" "$ravel_nodes" "$ravel_steps" "$t2" "$t3" "$ravel_loop" <<'EOF'
+import sys
+n, s, t0, t1, ll, rn, rs, t2, t3, rl = sys.argv[1:]
+n, s, rn, rs = int(n), int(s), int(rn), int(rs)
+lw, rw = float(t1) - float(t0), float(t3) - float(t2)
+ll, rl = float(ll), float(rl)
+print("code,nodes,steps,process_wall_s,loop_s,ns_per_node_step")
+print("lammps_spring_network,%d,%d,%.3f,%.3f,%.1f" % (n, s, lw, ll, ll / (n * s) * 1e9))
+print("ravel_default_scene,%d,%d,%.3f,%.3f,%.1f" % (rn, rs, rw, rl, rl / (rn * rs) * 1e9))
+print("ratio_ravel_over_lammps,,,%.2f,%.2f,%.2f" % (rw / lw, rl / ll, (rl / (rn * rs)) / (ll / (n * s))))
+EOF
