@@ -32,5 +32,8 @@ for stem in fig13_energy_vs_velocity_friction fig14_velocity_history fig16_balli
   done
 done
 head -c 8 "$out/charts/fig16_ballistic_limit_vs_friction.png" | od -An -tx1 | grep -q '89 50 4e 47' || fail "fig16 is not a PNG"
-ls "$out"/images/*.png >/dev/null 2>&1 || fail "no perforation images"
+# Images need the offscreen renderer (absent in the sanitizer builds, where the report says so).
+if ! grep -q 'this build has no offscreen renderer' "$report"; then
+  ls "$out"/images/*.png >/dev/null 2>&1 || fail "no perforation images"
+fi
 echo "paper smoke test ok ($claims statements)"
