@@ -94,10 +94,13 @@ best = max((s, i) for i, (s, c) in enumerate(zip(strain, copy)) if c == 0)
 print(best[1])
 EOF
 )
-  run_gui 1280 720 --frames 6 --pause-at-us 20 --do 1:play --do 2:wait --do 3:pick:"$element" \
-    --do 4:screenshot:"$out/pick.png"
+  run_gui 1280 720 --frames 8 --pause-at-us 20 --do 1:play --do 2:wait --do 3:pick-crossing:0 \
+    --do 4:pick:"$element" --do 5:screenshot:"$out/pick.png"
   cat log.txt
   [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  # Crossing 0 lies under the projectile's pole: pressed, so it carries a normal force.
+  cross=$(grep "picked crossing 0 (I=0, J=0)" log.txt) || fail "no crossing pick report"
+  echo "$cross" | grep -Eq "normal force [1-9][0-9.e+]* N" || fail "the pole crossing carries no normal force: $cross"
   line=$(grep "picked element $element " log.txt) || fail "no pick report"
   t_us=$(echo "$line" | sed -E 's/.* at t = ([0-9.]+) us.*/\1/')
   strain=$(echo "$line" | sed -E 's/.*strain ([-0-9.e+]+),.*/\1/')
@@ -173,6 +176,28 @@ for ra, rb in zip(a, b):
         if ra.get(k) != rb[k]:
             raise SystemExit(f"FAIL: {k}: app {ra.get(k)!r} != ravel sweep {rb[k]!r}")
 print("the app's sweep equals ravel sweep:", [r["residual_velocity_mps"] for r in a])
+EOF
+  ;;
+
+limit)
+  # The Ballistic limit window on a 24 mm ply (its runs last a few seconds, not minutes)
+  # finds the limit `ravel limit` finds on the same scene with the same tolerance, run for run.
+  small=(--set fabric.width_mm=24 --set fabric.length_mm=24)
+  run_gui 1280 720 "${small[@]}" --frames 6 --paused --export-dir "$out/app" --do 2:limit --do 3:wait
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  [ -s app/limit/limit.json ] || fail "the limit window wrote no limit.json"
+  "$ravel" limit "${small[@]}" --tolerance 2 --out "$out/cli" --quiet >/dev/null
+  "$python" - app/limit/limit.json cli/limit.json <<'EOF'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+if a["ballistic_limit_mps"] is None or a["ballistic_limit_mps"] != b["ballistic_limit_mps"]:
+    raise SystemExit(f"FAIL: app {a['ballistic_limit_mps']} m/s, ravel limit {b['ballistic_limit_mps']} m/s")
+va = [(r["velocity_mps"], r["perforated"]) for r in a["runs"]]
+vb = [(r["velocity_mps"], r["perforated"]) for r in b["runs"]]
+if va != vb:
+    raise SystemExit(f"FAIL: the runs differ: {va} vs {vb}")
+print("the app's limit equals ravel limit:", a["ballistic_limit_mps"], "m/s,", len(va), "runs")
 EOF
   ;;
 
