@@ -8,6 +8,7 @@
 
 #include "model.h"
 #include "solver.h"
+#include "version.h"
 
 namespace ravel {
 
@@ -424,6 +425,91 @@ Solver& Simulation::solver() {
 }
 std::uint64_t Simulation::state_hash() const {
   return impl_->solver->state_hash();
+}
+
+namespace {
+constexpr char kCheckpointMagic[9] = "RAVELCK1";
+
+template <class Ar, class I>
+void impl_io(Ar& ar, I& s) {
+  ar.mark(0x52564931);  // "RVI1"
+  ar.vec(s.history);
+  ar.pod(s.status);
+  ar.pod(s.reason);
+  ar.str(s.diagnosis);
+  ar.pod(s.sample_every);
+  ar.pod(s.worst_balance);
+  ar.pod(s.perforation_time);
+  ar.pod(s.last_attached_touch);
+  ar.pod(s.extensions);
+  ar.pod(s.end_time);
+  ar.pod(s.wall_s);
+  ar.strings(s.warnings);
+  ar.str(s.fault_cause);
+  ar.pod(s.fault_step);
+  ar.pod(s.fault_time);
+  ar.pod(s.search_lost_before);
+  ar.pod(s.slow_since);
+}
+}  // namespace
+
+std::string Simulation::checkpoint_fingerprint() const {
+  Scene s = impl_->scene;
+  s.solver.threads = 0;  // a run may resume with another thread count
+  s.source.clear();
+  s.warnings.clear();
+  return scene_to_toml(s) + "\nravel " + version() + " (source " + source_commit() + ")";
+}
+
+std::string Simulation::checkpoint() const {
+  StateWriter w;
+  for (char c : std::string(kCheckpointMagic)) w.pod(c);
+  w.str(checkpoint_fingerprint());
+  impl_io(w, const_cast<Impl&>(*impl_));
+  impl_->solver->save_state(w);
+  return w.data();
+}
+
+void Simulation::restore(const std::string& bytes) {
+  StateReader r(bytes);
+  std::string magic(8, ' ');
+  for (char& c : magic) r.pod(c);
+  if (magic != kCheckpointMagic) throw std::runtime_error("checkpoint: not a ravel checkpoint");
+  std::string fingerprint;
+  r.str(fingerprint);
+  if (fingerprint != checkpoint_fingerprint())
+    throw std::runtime_error(
+        "checkpoint: written for another scene or ravel build (the scene's keys, or the build that wrote it, "
+        "differ); run without --resume to start over");
+  // Read into copies first (fields and a fresh solver of the same model), so a damaged
+  // checkpoint changes nothing.
+  Impl copy_fields;
+  impl_io(r, copy_fields);
+  const Solver& old = *impl_->solver;
+  std::unique_ptr<Solver> fresh = make_solver(old.model(), impl_->scene.solver.precision, impl_->scene.solver.threads);
+  fresh->set_simd(impl_->scene.solver.simd);
+  fresh->set_max_balance_error(impl_->scene.solver.max_balance_error);
+  fresh->load_state(r);
+  if (!r.at_end()) throw std::runtime_error("checkpoint: trailing bytes");
+  impl_->solver = std::move(fresh);
+  Impl& I = *impl_;
+  I.history = std::move(copy_fields.history);
+  I.status = copy_fields.status;
+  I.reason = copy_fields.reason;
+  I.diagnosis = copy_fields.diagnosis;
+  I.sample_every = copy_fields.sample_every;
+  I.worst_balance = copy_fields.worst_balance;
+  I.perforation_time = copy_fields.perforation_time;
+  I.last_attached_touch = copy_fields.last_attached_touch;
+  I.extensions = copy_fields.extensions;
+  I.end_time = copy_fields.end_time;
+  I.wall_s = copy_fields.wall_s;
+  I.warnings = copy_fields.warnings;
+  I.fault_cause = copy_fields.fault_cause;
+  I.fault_step = copy_fields.fault_step;
+  I.fault_time = copy_fields.fault_time;
+  I.search_lost_before = copy_fields.search_lost_before;
+  I.slow_since = copy_fields.slow_since;
 }
 
 Summary Simulation::summary() const {

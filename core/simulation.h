@@ -108,6 +108,15 @@ class Simulation {
   // determinism checks.
   std::uint64_t state_hash() const;
 
+  // Checkpoints (`ravel run --resume`): the run so far as bytes (core/state_io.h), and a
+  // Simulation built from the same scene continued from such bytes, exactly as if it had
+  // never stopped. restore() throws std::runtime_error, changing nothing, when the bytes
+  // are not a checkpoint of this scene (solver threads aside) from this ravel build.
+  std::string checkpoint() const;
+  void restore(const std::string& bytes);
+  // What a checkpoint must match: the scene as TOML (solver threads aside) and the build.
+  std::string checkpoint_fingerprint() const;
+
   // Direct access for tests and studies.
   const Solver& solver() const;
   Solver& solver();

@@ -217,6 +217,95 @@ class SolverT final : public Solver {
   }
 
  protected:
+  void save_state(StateWriter& w) const override {
+    const_cast<SolverT*>(this)->state_io(w);
+  }
+  void load_state(StateReader& r) override {
+    state_io(r);
+  }
+
+  // Every member a step carries to the next, in one list for writing and reading (the
+  // per-step scratch is included where a later step or the ledger reads it). What the
+  // model and the thread count determine is rebuilt by the constructor, not written.
+  template <class Ar>
+  void state_io(Ar& ar) {
+    base_io(ar);
+    ar.mark(0x52565331);  // "RVS1"
+    ar.vec(x_);
+    ar.vec(v_);
+    ar.vec(f_);
+    ar.vec(v_prev_);
+    ar.vec(dv_contact_);
+    ar.vec(dv_friction_);
+    ar.vec(dv_pfriction_);
+    ar.vec(dx_contact_);
+    ar.vec(dv_compress_);
+    ar.vec(sum_c_);
+    ar.vec(cr_u_);
+    ar.vec(cr_stick_e_);
+    ar.pod(stick_end_);
+    ar.pod(stick_prev_);
+    ar.pod(friction_work_cum_);
+    ar.pod(compress_end_);
+    ar.pod(compress_prev_);
+    ar.pod(compress_work_cum_);
+    ar.vec(held_n_);
+    ar.vec(held_imp_);
+    ar.vec(held_fric_);
+    ar.vec(held_comp_);
+    ar.vec(held_list_);
+    ar.vec(ptouch_list_);
+    ar.vec(held_flag_);
+    ar.vec(sum_n_);
+    ar.vec(sum_f_);
+    ar.vec(sum_s_);
+    ar.pod(proj_impulse_);
+    ar.vec(strain_);
+    ar.vec(prev_strain_);
+    ar.vec(ev_);
+    ar.vec(stress_);
+    ar.vec(broken_flag_);
+    ar.vec(elem_force_);
+    ar.vec(bend_force_);
+    ar.vec(elem_energy_);
+    ar.vec(cr_kw_);
+    ar.vec(cr_kf_);
+    ar.vec(cr_win_);
+    ar.vec(cr_stick_w_);
+    ar.vec(cr_stick_f_);
+    ar.vec(cr_fn_);
+    ar.vec(cr_ft_);
+    ar.vec(cr_slip_);
+    ar.vec(cr_gap_);
+    ar.vec(cr_fn_step_);
+    ar.vec(cr_last_);
+    ar.vec(cr_active_);
+    ar.vec(cr_sliding_);
+    ar.vec(cr_event_);
+    ar.pod(xp_);
+    ar.pod(vp_);
+    ar.pod(ke_half_);
+    ar.pod(ke_fabric_half_);
+    ar.pod(stored_now_);
+    ar.pod(stored_prev_);
+    ar.pod(viscous_cum_);
+    ar.pod(viscous_prev_);
+    ar.pod(released_cum_);
+    ar.pod(released_prev_);
+    ar.pod(pfriction_cum_);
+    ar.pod(contact_cum_);
+    ar.pod(external_cum_);
+    ar.pod(shift_cum_);
+    ar.vec(shifted_);
+    ar.vec(elem_mark_);
+    ar.vec(bend_mark_);
+    ar.pod(mark_);
+    ar.vec(f_ext_);
+    ar.vec(crimp_damp_stress_);
+    ar.pod(damping_cum_);
+    ar.mark(0x52564531);  // "RVE1"
+  }
+
   void hash_into(std::uint64_t& h) const override {
     fnv(h, x_.data(), x_.size() * sizeof(V3));
     fnv(h, v_.data(), v_.size() * sizeof(V3));

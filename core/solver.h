@@ -30,13 +30,14 @@
 
 #include "ledger.h"
 #include "model.h"
+#include "state_io.h"
 
 namespace ravel {
 
 // Counts of places where the method's assumptions broke (SPEC §4), with the first one.
 struct ContactDiagnostics {
-  long skipped_nodes = 0;   // yarns slid more than one node against each other in one step
-  long repaired = 0;        // the nearest pair moved more than one node, the yarns less than half a node
+  long skipped_nodes = 0;  // yarns slid more than one node against each other in one step
+  long repaired = 0;       // the nearest pair moved more than one node, the yarns less than half a node
   double first_repair_time = -1;
   int first_repair_i = 0, first_repair_j = 0;
   long ravelled = 0;        // a yarn slipped off the end of its partner: crossing released
@@ -114,6 +115,10 @@ class Solver {
   int stuck_crossings() const { return stuck_count_; }
   int broken_count(int family) const { return broken_[family]; }
   std::uint64_t state_hash() const;
+  // The dynamic state, for checkpoints (core/state_io.h): everything a step carries to the
+  // next. load_state reads it into a solver built from the same model (the caller checks).
+  virtual void save_state(StateWriter& w) const = 0;
+  virtual void load_state(StateReader& r) = 0;
 
   // Projectile contact history, for perforation detection.
   bool had_contact() const { return had_contact_; }
@@ -124,6 +129,28 @@ class Solver {
  protected:
   explicit Solver(Model m) : model_(std::move(m)) {}
   virtual void hash_into(std::uint64_t& h) const = 0;
+  // The base class's part of the state.
+  template <class Ar>
+  void base_io(Ar& ar) {
+    ar.mark(0x52564231);  // "RVB1"
+    ar.pod(time_);
+    ar.pod(steps_);
+    ar.pod(ledger_);
+    ar.pod(diag_);
+    ar.str(divergence_);
+    ar.str(divergence_cause_);
+    ar.pod(divergence_step_);
+    ar.pod(divergence_time_);
+    ar.pod(nodes_on_projectile_);
+    ar.pod(projectile_force_);
+    ar.pod(yarn_force_);
+    ar.pod(max_strain_);
+    ar.pod(sliding_count_);
+    ar.pod(stuck_count_);
+    ar.pod(broken_);
+    ar.pod(had_contact_);
+    ar.pod(last_contact_time_);
+  }
 
   Model model_;
   double time_ = 0;

@@ -16,6 +16,7 @@
 #include "model.h"
 #include "simulation.h"
 #include "solver.h"
+#include "sweep.h"     // studies/: read_text_file
 #include "tradeoff.h"  // studies/: suggestions from measured speed/accuracy trade-offs
 #ifdef RAVEL_HAVE_SNAPSHOT
 #include "render/frame_recorder.h"  // --frames / --vtk (render/ owner)
@@ -147,13 +148,51 @@ int cmd_run(const Args& args) {
     if (a.flags.count("frames") || has_switch(a, "vtk"))
       throw UsageError("--frames / --vtk need a build with the renderer (RAVEL_BUILD_GUI=ON)");
 #endif
+    // Checkpoints: DIR/checkpoint.bin every --checkpoint-every seconds and on Ctrl-C, gone
+    // when the run ends; --resume continues from it (Simulation::restore checks that it is
+    // this scene's, from this build).
+    double checkpoint_every_s = 60;
+    if (a.flags.count("checkpoint-every")) {
+      char* end = nullptr;
+      checkpoint_every_s = std::strtod(a.flags["checkpoint-every"].c_str(), &end);
+      if (a.flags["checkpoint-every"].empty() || *end || !(checkpoint_every_s >= 0))
+        throw UsageError("--checkpoint-every: expected seconds >= 0 (0 = never), got '" + a.flags["checkpoint-every"] +
+                         "'");
+    }
+    const bool resume = has_switch(a, "resume");
+    if (resume && (a.flags.count("frames") || has_switch(a, "vtk")))
+      throw UsageError(
+          "--resume cannot be combined with --frames or --vtk (the frames before the checkpoint are gone)");
+    const std::string checkpoint_path = a.out_dir + "/checkpoint.bin";
     Scene scene = load_scene_from(a);
     // Said before a run that may take hours, not only in the summary at its end.
     for (const auto& w : scene.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     prepare_output_dir(a.out_dir);
-    clear_earlier_run(a.out_dir);
-    install_signal_handlers();
     Simulation sim(scene);
+    std::string kept;
+    if (resume) {
+      std::error_code ec;
+      if (std::filesystem::exists(checkpoint_path, ec)) {
+        kept = studies::read_text_file(checkpoint_path);
+        try {
+          sim.restore(kept);
+        } catch (const std::exception& e) {
+          throw SceneError("", checkpoint_path,
+                           std::string(e.what()) + " (it is kept; --out another folder or drop --resume)");
+        }
+        std::fprintf(stderr, "ravel: resuming from %s at t = %.2f us (step %ld)\n", checkpoint_path.c_str(),
+                     sim.time_s() * 1e6, sim.step_count());
+      } else {
+        std::fprintf(stderr, "ravel: --resume: no checkpoint in %s; starting at t = 0\n", a.out_dir.c_str());
+      }
+    }
+    if (kept.empty()) clear_earlier_run(a.out_dir);
+    install_signal_handlers();
+    auto last_checkpoint = std::chrono::steady_clock::now();
+    auto write_checkpoint = [&](const Simulation& s) {
+      write_file_atomic(checkpoint_path, s.checkpoint());
+      last_checkpoint = std::chrono::steady_clock::now();
+    };
 #ifdef RAVEL_HAVE_SNAPSHOT
     auto recorder = render::FrameRecorder::create(rec, &rec_error);
     if (!recorder) throw OutputError(rec_error);
@@ -173,6 +212,11 @@ int cmd_run(const Args& args) {
 #ifdef RAVEL_HAVE_SNAPSHOT
       if (rec_ok) rec_ok = recorder->on_sample(s, &rec_error);
 #endif
+      // A checkpoint now and then, and on Ctrl-C before the run stops (the state as it is,
+      // not yet marked interrupted).
+      if (checkpoint_every_s > 0 && (g_interrupt.load() || std::chrono::steady_clock::now() - last_checkpoint >
+                                                               std::chrono::duration<double>(checkpoint_every_s)))
+        write_checkpoint(s);
       if (!wanted) return;
       auto now = std::chrono::steady_clock::now();
       if (now - last < std::chrono::milliseconds(tty ? 200 : 5000)) return;
@@ -194,6 +238,14 @@ int cmd_run(const Args& args) {
     });
     if (progress) std::fprintf(stderr, "\r%*s\r", 110, "");
     write_run_outputs(a.out_dir, sim);
+    {
+      // The run ended (or diverged): nothing to resume. Interrupted: the checkpoint stays.
+      std::error_code ec;
+      if (sim.summary().status != RunStatus::interrupted)
+        std::filesystem::remove(checkpoint_path, ec);
+      else if (std::filesystem::exists(checkpoint_path, ec) && !has_switch(a, "quiet"))
+        std::printf("  checkpoint kept: %s (rerun with --resume to continue)\n", checkpoint_path.c_str());
+    }
 #ifdef RAVEL_HAVE_SNAPSHOT
     if (rec_ok) rec_ok = recorder->finish(sim, &rec_error);
     if (!rec_ok) throw OutputError(rec_error);

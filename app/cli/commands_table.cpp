@@ -54,6 +54,12 @@ std::vector<Command> make_table() {
                 {"vtk", nullptr, false, "a VTU series DIR/vtk/frame.pvd at the --frames times (default every=100)"},
                 {"view", "NAME", false, "camera of the PNG frames: oblique (default), top, back or section"},
                 {"field", "NAME", false, "colour of the PNG frames: strain (default), velocity or sliding"},
+                {"resume", nullptr, false,
+                 "continue from DIR/checkpoint.bin (a killed or interrupted run of the same scene and build) "
+                 "instead of t = 0"},
+                {"checkpoint-every", "S", false,
+                 "write DIR/checkpoint.bin every S seconds of wall time and on Ctrl-C (default 60; 0 = never); "
+                 "removed when the run ends"},
                 kQuiet}});
   t.push_back({"snapshot",
                "ravel snapshot [SCENE] [--set ...] --at T_US[,T_US...] --out DIR [options]",

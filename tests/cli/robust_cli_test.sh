@@ -103,5 +103,33 @@ grep -qF "ravel: warning: projectile.mass_g = 0.007 g is far outside the usual 0
   && ok || bad "no warning on stderr before the run: $out"
 grep -qF "it looks like a value in kg" "$tmp/warn/summary.json" && ok || bad "warning missing from summary.json"
 
+# --- A killed run resumes from its checkpoint (--resume) and ends bit for bit as a run that
+# was never stopped: the same history.csv, byte for byte. kill -9: nothing is written at the
+# kill, only the periodic checkpoint (every 0.2 s here) is there.
+ck=(--set fabric.width_mm=60 --set fabric.length_mm=60 --set projectile.velocity_mps=100 --quiet)
+"$ravel" run "${ck[@]}" --out "$tmp/ck_ref" >/dev/null
+"$ravel" run "${ck[@]}" --checkpoint-every 0.2 --out "$tmp/ck" >/dev/null &
+pid=$!
+for _ in $(seq 200); do [ -s "$tmp/ck/checkpoint.bin" ] && break; sleep 0.05; done
+sleep 0.3
+kill -9 "$pid" 2>/dev/null
+wait "$pid" 2>/dev/null || true
+[ -s "$tmp/ck/checkpoint.bin" ] && ok || bad "no checkpoint was written before the kill"
+[ ! -e "$tmp/ck/history.csv" ] && ok || bad "the killed run ended before the kill: the test proves nothing"
+out=$("$ravel" run "${ck[@]}" --resume --out "$tmp/ck" 2>&1 >/dev/null)
+grep -q "resuming from $tmp/ck/checkpoint.bin at t = " <<<"$out" && ok || bad "no resume message: $out"
+cmp -s "$tmp/ck/history.csv" "$tmp/ck_ref/history.csv" && ok || bad "the resumed run's history differs from an uninterrupted run's"
+[ ! -e "$tmp/ck/checkpoint.bin" ] && ok || bad "the checkpoint stayed after the run ended"
+# A checkpoint of another scene is refused (exit 2), named, and kept.
+"$ravel" run "${ck[@]}" --checkpoint-every 0.2 --out "$tmp/ck2" >/dev/null &
+pid=$!
+for _ in $(seq 200); do [ -s "$tmp/ck2/checkpoint.bin" ] && break; sleep 0.05; done
+kill -9 "$pid" 2>/dev/null
+wait "$pid" 2>/dev/null || true
+expect_exit 2 "checkpoint.bin: checkpoint: written for another scene or ravel build" -- \
+  "$ravel" run "${ck[@]}" --set yarn.friction=0.3 --resume --out "$tmp/ck2"
+[ -s "$tmp/ck2/checkpoint.bin" ] && ok || bad "a refused checkpoint was removed"
+expect_exit 2 "--resume cannot be combined with --frames or --vtk" -- "$ravel" run "${ck[@]}" --resume --vtk --out "$tmp/ck3"
+
 echo "robust cli: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]
