@@ -236,11 +236,19 @@ TEST(ChartExtras, LogTicksAndGridChart) {
   const std::string csv = chart_csv(c);
   EXPECT_NE(csv.find("2,sliding,diverged,energy"), std::string::npos) << csv;
   const auto rgb = chart_rgb(c, 300, 150);
-  // A pixel in the middle of the last cell is the diverged colour.
-  bool found = false;
-  for (size_t i = 0; i + 2 < rgb.size(); i += 3)
-    if (rgb[i] == 213 && rgb[i + 1] == 94 && rgb[i + 2] == 0) found = true;
-  EXPECT_TRUE(found);
+  // The last cell (dt_factor 2) is filled with the diverged colour, the first two with the
+  // stable one: a cell's worth of pixels each (a legend swatch is a few dozen), the diverged
+  // block right of the stable ones.
+  long nd = 0, ns = 0;
+  double xd = 0, xs = 0;
+  for (size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const double x = double((i / 3) % 300);
+    if (rgb[i] == 213 && rgb[i + 1] == 94 && rgb[i + 2] == 0) ++nd, xd += x;
+    if (rgb[i] == 0 && rgb[i + 1] == 158 && rgb[i + 2] == 115) ++ns, xs += x;
+  }
+  ASSERT_GT(nd, 500) << "no diverged cell";
+  ASSERT_GT(ns, 2 * 500) << "no stable cells";
+  EXPECT_GT(xd / double(nd), xs / double(ns) + 30) << "the diverged cell is not the rightmost";
   EXPECT_NE(chart_svg(c).find("#d55e00"), std::string::npos);
   // Log axes: non-positive values are gaps, not errors.
   Chart l;
