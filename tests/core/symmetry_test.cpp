@@ -82,9 +82,20 @@ TEST(Symmetry, QuarterAndFullAgree) {
 }
 
 // Before anything breaks the two models are the same to rounding: compare the ledger at
-// a fixed time with elastic, unbreakable yarns.
+// a fixed time with elastic, unbreakable yarns. The bounds are what each model's arithmetic
+// allows, not what a run happened to give. Pin-jointed: the same operations on the same
+// numbers in another order (the quarter's nodes are numbered differently and its sums run
+// over fewer terms), so 160 steps leave differences of 1e-16..1e-14 (measured 1.4e-16 in the
+// projectile's speed, 1.6e-14 in strain energy); bound 1e-12. Sliding: the yarn contact's
+// decisions (stick or slip, which pair is nearest, tie weights within 2 % of D) switch on
+// quantities that differ at rounding level, and a switched decision moves a crossing's
+// impulse by a finite amount, so the difference grows to a few 1e-6 (measured 7e-9 in speed,
+// 7.5e-6 in strain energy, 1.7e-6 in fabric KE); bound 1e-4, under which a 0.05 % asymmetry
+// (the size of bug the old 1e-3 bound let through) fails.
 TEST(Symmetry, QuarterAndFullLedgersMatchBeforeFailure) {
   for (const char* model : {"solver.model=pin_jointed", "solver.model=sliding"}) {
+    const bool pinned = std::string(model).find("pin") != std::string::npos;
+    const double tol = pinned ? 1e-12 : 1e-4;
     const auto base =
         test::small_patch() + std::vector<std::string>{model, "yarn.breakable=false", "projectile.velocity_mps=200"};
     Simulation q(test::scene_with(base));
@@ -93,9 +104,9 @@ TEST(Symmetry, QuarterAndFullLedgersMatchBeforeFailure) {
     test::run_until(f, 10e-6);
     const HistoryRow& a = q.history().back();
     const HistoryRow& b = f.history().back();
-    EXPECT_NEAR(a.projectile_velocity_mps, b.projectile_velocity_mps, 1e-3) << model;
-    EXPECT_NEAR(a.ledger.strain_energy_J, b.ledger.strain_energy_J, 1e-3 * b.ledger.strain_energy_J) << model;
-    EXPECT_NEAR(a.ledger.fabric_ke_J, b.ledger.fabric_ke_J, 1e-3 * b.ledger.fabric_ke_J) << model;
+    EXPECT_NEAR(a.projectile_velocity_mps, b.projectile_velocity_mps, tol * b.projectile_velocity_mps) << model;
+    EXPECT_NEAR(a.ledger.strain_energy_J, b.ledger.strain_energy_J, tol * b.ledger.strain_energy_J) << model;
+    EXPECT_NEAR(a.ledger.fabric_ke_J, b.ledger.fabric_ke_J, tol * b.ledger.fabric_ke_J) << model;
   }
 }
 
