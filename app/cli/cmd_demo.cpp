@@ -1,6 +1,7 @@
 // `ravel demo --list` and `ravel demo NAME|all --out DIR [--quick] [--size WxH] [--threads N]
 // [--quiet]`: the guided demos (app/demos/demos.h) rendered headless (OSMesa) as captioned PNGs
 // of their key frames, their charts and DIR/index.md, for handouts and slides.
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 
@@ -10,6 +11,9 @@
 #include "demos.h"
 
 namespace ravel::app {
+
+std::atomic<bool>& interrupt_flag();  // cmd_run.cpp
+void install_signal_handlers();
 
 int cmd_demo(const Args& args) {
   try {
@@ -69,12 +73,34 @@ int cmd_demo(const Args& args) {
       }
       selected.push_back(d);
     }
+    // Ctrl-C stops the demo being rendered between steps; the demos already finished are kept
+    // (each is whole once its index.md is written, last), and `ravel demo all` run again skips
+    // them and renders the rest.
+    install_signal_handlers();
+    opt.interrupt = &interrupt_flag();
+    int done = 0, skipped = 0;
     for (const demos::Demo* d : selected) {
       const std::string dir = selected.size() > 1 ? (std::filesystem::path(a.out_dir) / d->name).string() : a.out_dir;
+      std::error_code ec;
+      if (selected.size() > 1 && std::filesystem::exists(std::filesystem::path(dir) / "index.md", ec)) {
+        if (opt.progress) opt.progress("demo " + d->name + ": finished earlier, kept (" + dir + ")");
+        ++skipped;
+        continue;
+      }
       if (opt.progress) opt.progress("demo " + d->name + ": " + d->title + " -> " + dir);
-      const demos::DemoResult r = demos::render_demo(*d, dir, opt);
-      std::printf("demo %s: %zu key frames, %zu charts in %.0f s; see %s\n", d->name.c_str(), r.images.size(),
-                  r.charts.size(), r.wall_time_s, r.index_path.c_str());
+      try {
+        const demos::DemoResult r = demos::render_demo(*d, dir, opt);
+        std::printf("demo %s: %zu key frames, %zu charts in %.0f s; see %s\n", d->name.c_str(), r.images.size(),
+                    r.charts.size(), r.wall_time_s, r.index_path.c_str());
+        ++done;
+      } catch (const std::runtime_error& e) {
+        if (!interrupt_flag().load()) throw;
+        std::fprintf(stderr,
+                     "ravel: interrupted during demo %s; finished demos kept: %d%s; run the same command again to "
+                     "render the rest\n",
+                     d->name.c_str(), done + skipped, selected.size() > 1 ? " (each with its index.md)" : "");
+        return exit_interrupted;
+      }
     }
     return exit_ok;
   } catch (const std::exception& e) {

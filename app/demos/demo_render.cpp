@@ -253,7 +253,7 @@ DemoResult render_demo(const Demo& demo, const std::string& out_dir, const DemoR
   hr->context().make_current();
   render::Annotator annotator;
 
-  DemoRunner runner(demo, opt.solver_threads);
+  DemoRunner runner(demo, opt.solver_threads, opt.interrupt);
   std::vector<Frame> first;
   for (std::size_t i = 0; i < runner.size(); ++i) first.push_back(runner.simulation(i).frame());
   render::ViewPreset view = render::ViewPreset::oblique;

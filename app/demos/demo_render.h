@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -74,6 +75,7 @@ struct DemoRenderOptions {
   int solver_threads = 1;
   bool quick = false;
   std::function<void(const std::string&)> progress;  // one line per step ("" = quiet)
+  const std::atomic<bool>* interrupt = nullptr;      // Ctrl-C: the demo stops and throws "interrupted"
 };
 
 // Run the demo and write its images, charts and index.md into out_dir (created).

@@ -313,7 +313,8 @@ double SharedClock::advance(double dt_s, const std::vector<double>& run_times_s,
 
 // ---- Runner ----------------------------------------------------------------------------
 
-DemoRunner::DemoRunner(const Demo& demo, int solver_threads) : demo_(demo) {
+DemoRunner::DemoRunner(const Demo& demo, int solver_threads, const std::atomic<bool>* interrupt)
+    : demo_(demo), interrupt_(interrupt) {
   for (std::size_t i = 0; i < demo.runs.size(); ++i) {
     Scene s = demo_scene(demo, i);
     s.solver.threads = solver_threads;
@@ -324,17 +325,21 @@ DemoRunner::DemoRunner(const Demo& demo, int solver_threads) : demo_(demo) {
 DemoRunner::~DemoRunner() = default;
 
 void DemoRunner::advance_to(double t_s) {
-  auto go = [t_s](Simulation* sim) {
-    while (!sim->finished() && sim->time_s() + 0.5 * sim->dt_s() < t_s)
+  const std::atomic<bool>* stop = interrupt_;
+  auto go = [t_s, stop](Simulation* sim) {
+    while (!sim->finished() && sim->time_s() + 0.5 * sim->dt_s() < t_s) {
+      if (stop && stop->load()) return;
       if (!sim->step()) break;
+    }
   };
   if (sims_.size() == 1) {
     go(sims_[0].get());
-    return;
+  } else {
+    std::vector<std::thread> threads;
+    for (auto& s : sims_) threads.emplace_back(go, s.get());
+    for (auto& t : threads) t.join();
   }
-  std::vector<std::thread> threads;
-  for (auto& s : sims_) threads.emplace_back(go, s.get());
-  for (auto& t : threads) t.join();
+  if (interrupt_ && interrupt_->load()) throw std::runtime_error("interrupted");
 }
 
 void DemoRunner::run_to_end() {

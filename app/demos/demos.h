@@ -9,6 +9,7 @@
 #pragma once
 
 #include <functional>
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -142,7 +143,9 @@ class SharedClock {
 // (perforation, rebound) stay at their last state.
 class DemoRunner {
  public:
-  DemoRunner(const Demo& demo, int solver_threads = 1);
+  // `interrupt` (optional): when it becomes true the runs stop between steps and
+  // advance_to / run_to_end throw std::runtime_error("interrupted").
+  DemoRunner(const Demo& demo, int solver_threads = 1, const std::atomic<bool>* interrupt = nullptr);
   ~DemoRunner();
   // Advance every run to time t_s (each to its step closest to t_s) or its end.
   void advance_to(double t_s);
@@ -158,6 +161,7 @@ class DemoRunner {
  private:
   Demo demo_;
   std::vector<std::unique_ptr<Simulation>> sims_;
+  const std::atomic<bool>* interrupt_ = nullptr;
 };
 
 }  // namespace ravel::app::demos

@@ -131,5 +131,21 @@ expect_exit 2 "checkpoint.bin: checkpoint: written for another scene or ravel bu
 [ -s "$tmp/ck2/checkpoint.bin" ] && ok || bad "a refused checkpoint was removed"
 expect_exit 2 "--resume cannot be combined with --frames or --vtk" -- "$ravel" run "${ck[@]}" --resume --vtk --out "$tmp/ck3"
 
+# --- Ctrl-C during `ravel demo all` (builds with the renderer): the demo being rendered
+# stops, exit 130, the finished ones are kept whole, a rerun skips them.
+if "$ravel" demo --list >/dev/null 2>&1; then
+  "$ravel" demo all --size 480x300 --out "$tmp/demo" --quiet >"$tmp/demo.log" 2>&1 &
+  pid=$!
+  for _ in $(seq 600); do [ -s "$tmp/demo/waves/index.md" ] && break; sleep 0.1; done
+  kill -INT "$pid" 2>/dev/null
+  rc=0
+  wait "$pid" || rc=$?
+  [ "$rc" -eq 130 ] && ok || bad "demo all interrupted: exit $rc, expected 130: $(cat "$tmp/demo.log")"
+  grep -q "interrupted during demo .*finished demos kept: 1" "$tmp/demo.log" && ok || bad "no interrupt message: $(cat "$tmp/demo.log")"
+  [ -s "$tmp/demo/waves/05_waves_35us.png" ] && ok || bad "the finished demo was not kept"
+  out=$("$ravel" demo all --size 480x300 --out "$tmp/demo" 2>&1 & p2=$!; sleep 1; kill -INT $p2; wait $p2)
+  grep -q "demo waves: finished earlier, kept" <<<"$out" && ok || bad "a rerun did not skip the finished demo: $out"
+fi
+
 echo "robust cli: $pass passed, $fails failed"
 [ "$fails" -eq 0 ]
