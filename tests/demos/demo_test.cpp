@@ -204,16 +204,6 @@ TEST_P(DemoRender, ReachesItsKeyFramesWithImagesThatAreNotBlankAndDiffer) {
     EXPECT_TRUE(fs::exists(stem + ".csv")) << stem;
   }
   EXPECT_TRUE(fs::exists(r.result.index_path));
-  if (GetParam() == "limit") {
-    // The demo's two runs straddle the limit in the runs themselves: the first is stopped
-    // (rebounded or caught), the second perforates.
-    const auto& last = r.result.images.back().runs;
-    ASSERT_EQ(last.size(), 2u);
-    EXPECT_FALSE(last[0].summary.perforated) << "run below the limit perforated";
-    EXPECT_TRUE(last[0].summary.end_reason == EndReason::rebounded || last[0].summary.end_reason == EndReason::caught)
-        << to_string(last[0].summary.end_reason);
-    EXPECT_TRUE(last[1].summary.perforated) << "run above the limit did not perforate";
-  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Quick, DemoRender, ::testing::Values("waves", "friction", "slit", "limit"));
