@@ -481,10 +481,12 @@ void Simulation::restore(const std::string& bytes) {
     throw std::runtime_error(
         "checkpoint: written for another scene or ravel build (the scene's keys, or the build that wrote it, "
         "differ); run without --resume to start over");
-  // Read into copies first (fields and a fresh solver of the same model), so a damaged
-  // checkpoint changes nothing.
-  Impl copy_fields;
-  impl_io(r, copy_fields);
+  // Read everything into scratch first (the fields into a spare Impl, the solver's state into a
+  // fresh solver of the same model), so damaged bytes change nothing; then read the fields
+  // again, into this run, from bytes now known to be whole.
+  const std::size_t fields_at = r.position();
+  Impl scratch;
+  impl_io(r, scratch);
   const Solver& old = *impl_->solver;
   std::unique_ptr<Solver> fresh = make_solver(old.model(), impl_->scene.solver.precision, impl_->scene.solver.threads);
   fresh->set_simd(impl_->scene.solver.simd);
@@ -492,24 +494,8 @@ void Simulation::restore(const std::string& bytes) {
   fresh->load_state(r);
   if (!r.at_end()) throw std::runtime_error("checkpoint: trailing bytes");
   impl_->solver = std::move(fresh);
-  Impl& I = *impl_;
-  I.history = std::move(copy_fields.history);
-  I.status = copy_fields.status;
-  I.reason = copy_fields.reason;
-  I.diagnosis = copy_fields.diagnosis;
-  I.sample_every = copy_fields.sample_every;
-  I.worst_balance = copy_fields.worst_balance;
-  I.perforation_time = copy_fields.perforation_time;
-  I.last_attached_touch = copy_fields.last_attached_touch;
-  I.extensions = copy_fields.extensions;
-  I.end_time = copy_fields.end_time;
-  I.wall_s = copy_fields.wall_s;
-  I.warnings = copy_fields.warnings;
-  I.fault_cause = copy_fields.fault_cause;
-  I.fault_step = copy_fields.fault_step;
-  I.fault_time = copy_fields.fault_time;
-  I.search_lost_before = copy_fields.search_lost_before;
-  I.slow_since = copy_fields.slow_since;
+  r.seek(fields_at);
+  impl_io(r, *impl_);
 }
 
 Summary Simulation::summary() const {

@@ -89,6 +89,11 @@ class StateReader {
     if (t != tag) fail("section mark " + std::to_string(tag) + " not found (a different build wrote it?)");
   }
   bool at_end() const { return pos_ == in_.size(); }
+  std::size_t position() const { return pos_; }
+  void seek(std::size_t pos) {
+    if (pos > in_.size()) fail("seek past the end");
+    pos_ = pos;
+  }
 
  private:
   void bytes(void* p, std::size_t n) {

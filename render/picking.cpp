@@ -48,6 +48,15 @@ float segment_distance(float px, float py, const Projected& a, const Projected& 
   return std::sqrt(qx * qx + qy * qy);
 }
 
+// A candidate d pixels from the point and `depth` from the eye beats the best so far if it is
+// clearly nearer on screen, or equally near (within a pixel) and nearer the eye.
+bool nearer(float d, float depth, float* best_d, float* best_depth) {
+  if (!(d < *best_d - 1.0f || (d <= *best_d + 1.0f && depth < *best_depth))) return false;
+  *best_d = std::min(*best_d, d);
+  *best_depth = depth;
+  return true;
+}
+
 bool cut_away(const Frame& frame, const ViewOptions& o, const std::array<float, 3>& p, const std::array<float, 3>& m) {
   const bool cut = o.section_cut || o.view == ViewPreset::section;
   return cut && p[1] * m[1] < frame.projectile_pos[1];
@@ -77,10 +86,8 @@ Pick pick_element(const Frame& frame, const Camera& camera, const ViewOptions& o
       const float d = segment_distance(x_px, y_px, proj[a], proj[b], &t);
       if (d > max_px) continue;
       const float depth = proj[a].depth + t * (proj[b].depth - proj[a].depth);
-      // Equally near on screen (within a pixel): the nearer to the eye.
-      if (d < best_d - 1.0f || (d <= best_d + 1.0f && depth < best_depth)) {
-        best_d = std::min(best_d, d);
-        best_depth = depth;
+      if (nearer(d, depth, &best_d, &best_depth)) {
+        best = Pick{};
         best.element = int(e);
         best.copy = int(c);
         best.mirror = m;
@@ -114,9 +121,8 @@ Pick pick_crossing(const Frame& frame, const Camera& camera, const ViewOptions& 
       if (!q.ok) continue;
       const float d = std::hypot(q.x - x_px, q.y - y_px);
       if (d > max_px) continue;
-      if (d < best_d - 1.0f || (d <= best_d + 1.0f && q.depth < best_depth)) {
-        best_d = std::min(best_d, d);
-        best_depth = q.depth;
+      if (nearer(d, q.depth, &best_d, &best_depth)) {
+        best = Pick{};
         best.crossing = int(k);
         best.copy = int(c);
         best.mirror = copies[c];
