@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "model.h"
 #include "solver.h"
@@ -461,16 +462,33 @@ std::string Simulation::checkpoint_fingerprint() const {
   return scene_to_toml(s) + "\nravel " + version() + " (source " + source_commit() + ")";
 }
 
+// FNV-1a over the checkpoint's bytes, appended to it: a damaged checkpoint is refused before
+// anything in it is believed (array sizes, node and element indices).
+static std::uint64_t checkpoint_sum(const char* p, std::size_t n) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
+  return h;
+}
+
 std::string Simulation::checkpoint() const {
   StateWriter w;
   for (char c : std::string(kCheckpointMagic)) w.pod(c);
   w.str(checkpoint_fingerprint());
   impl_io(w, const_cast<Impl&>(*impl_));
   impl_->solver->save_state(w);
-  return w.data();
+  std::string bytes = w.data();
+  const std::uint64_t sum = checkpoint_sum(bytes.data(), bytes.size());
+  bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
+  return bytes;
 }
 
-void Simulation::restore(const std::string& bytes) {
+void Simulation::restore(const std::string& whole) {
+  std::uint64_t sum = 0;
+  if (whole.size() < sizeof sum) throw std::runtime_error("checkpoint: truncated");
+  std::memcpy(&sum, whole.data() + whole.size() - sizeof sum, sizeof sum);
+  const std::string bytes = whole.substr(0, whole.size() - sizeof sum);
+  if (checkpoint_sum(bytes.data(), bytes.size()) != sum)
+    throw std::runtime_error("checkpoint: damaged (its checksum does not match)");
   StateReader r(bytes);
   std::string magic(8, ' ');
   for (char& c : magic) r.pod(c);
@@ -495,6 +513,7 @@ void Simulation::restore(const std::string& bytes) {
   if (!r.at_end()) throw std::runtime_error("checkpoint: trailing bytes");
   impl_->solver = std::move(fresh);
   r.seek(fields_at);
+  impl_->history.clear();  // a list: read whole
   impl_io(r, *impl_);
 }
 

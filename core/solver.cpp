@@ -303,7 +303,8 @@ class SolverT final : public Solver {
     ar.vec(f_ext_);
     ar.vec(crimp_damp_stress_);
     ar.pod(damping_cum_);
-    ar.mark(0x52564531);  // "RVE1"
+    ar.pod(balance_window_);  // the slow-drift check's memory (close_ledger_row)
+    ar.mark(0x52564532);      // "RVE2"
   }
 
   void hash_into(std::uint64_t& h) const override {

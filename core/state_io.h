@@ -65,6 +65,10 @@ class StateReader {
   void vec(std::vector<T>& v) {
     std::uint64_t n = 0;
     pod(n);
+    // An array the model sizes (it is not empty in a freshly built solver) must come back
+    // with that size: a checkpoint of the same scene cannot have another.
+    if (!v.empty() && n != v.size())
+      fail("an array of " + std::to_string(n) + " items where the model has " + std::to_string(v.size()));
     if (n > (in_.size() - pos_) / std::max<std::size_t>(1, sizeof(T))) fail("an array runs past the end");
     v.resize(n);
     bytes(v.data(), n * sizeof(T));

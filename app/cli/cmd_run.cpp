@@ -189,9 +189,17 @@ int cmd_run(const Args& args) {
     if (kept.empty()) clear_earlier_run(a.out_dir);
     install_signal_handlers();
     auto last_checkpoint = std::chrono::steady_clock::now();
+    // A checkpoint that cannot be written (disk full, folder gone) costs the resume, not the
+    // run: a warning, once, and the run goes on to write its results.
+    bool checkpoint_warned = false;
     auto write_checkpoint = [&](const Simulation& s) {
-      write_file_atomic(checkpoint_path, s.checkpoint());
       last_checkpoint = std::chrono::steady_clock::now();
+      try {
+        write_file_atomic(checkpoint_path, s.checkpoint());
+      } catch (const std::exception& e) {
+        if (!checkpoint_warned) std::fprintf(stderr, "ravel: warning: no checkpoint written: %s\n", e.what());
+        checkpoint_warned = true;
+      }
     };
 #ifdef RAVEL_HAVE_SNAPSHOT
     auto recorder = render::FrameRecorder::create(rec, &rec_error);
@@ -208,14 +216,15 @@ int cmd_run(const Args& args) {
     const auto started = std::chrono::steady_clock::now();
     auto last = started;
     const double end_s = scene.solver.end_time_s;
-    sim.run(&g_interrupt, [&](const Simulation& s) {
+    // The run's loop (Simulation::run's, with the checkpoints): a step at a time; after each
+    // history sample the frames and the progress line; at Ctrl-C a checkpoint of the state as
+    // it is, before the run is marked interrupted.
+    auto on_sample = [&](const Simulation& s) {
 #ifdef RAVEL_HAVE_SNAPSHOT
       if (rec_ok) rec_ok = recorder->on_sample(s, &rec_error);
 #endif
-      // A checkpoint now and then, and on Ctrl-C before the run stops (the state as it is,
-      // not yet marked interrupted).
-      if (checkpoint_every_s > 0 && (g_interrupt.load() || std::chrono::steady_clock::now() - last_checkpoint >
-                                                               std::chrono::duration<double>(checkpoint_every_s)))
+      if (checkpoint_every_s > 0 &&
+          std::chrono::steady_clock::now() - last_checkpoint > std::chrono::duration<double>(checkpoint_every_s))
         write_checkpoint(s);
       if (!wanted) return;
       auto now = std::chrono::steady_clock::now();
@@ -235,7 +244,20 @@ int cmd_run(const Args& args) {
                    tty ? "\r  t = %7.2f us  v = %7.2f m/s  broken %d/%d  %s   "
                        : "ravel: t = %.2f us, v = %.2f m/s, broken %d/%d, %s\n",
                    r.t_s * 1e6, r.projectile_velocity_mps, r.broken_warp, r.broken_weft, when);
-    });
+    };
+    std::size_t seen = sim.history().size();
+    while (!sim.finished()) {
+      if (g_interrupt.load()) {
+        if (checkpoint_every_s > 0) write_checkpoint(sim);
+        sim.interrupt("interrupted by signal");
+        break;
+      }
+      sim.step();
+      if (sim.history().size() != seen) {
+        seen = sim.history().size();
+        on_sample(sim);
+      }
+    }
     if (progress) std::fprintf(stderr, "\r%*s\r", 110, "");
     write_run_outputs(a.out_dir, sim);
     {

@@ -124,6 +124,14 @@ TEST(Checkpoint, AnotherScenesOrDamagedBytesAreRefusedAndChangeNothing) {
     EXPECT_EQ(same.state_hash(), same_before);
   }
   EXPECT_THROW(same.restore(bytes + "x"), std::runtime_error);
+  std::string flipped = bytes;  // one bit of one node's position
+  flipped[flipped.size() / 2] ^= 1;
+  try {
+    same.restore(flipped);
+    FAIL() << "a damaged checkpoint was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(same.restore("not a checkpoint at all"), std::runtime_error);
   EXPECT_EQ(same.state_hash(), same_before);
   same.restore(bytes);  // the whole, right bytes
