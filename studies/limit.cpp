@@ -160,9 +160,13 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   bool down = o == perforated;
   if (!failed && o != undecided) (o == perforated ? hi : lo) = v;
   while (budget_left() && (lo < 0 || hi < 0)) {
+    const double prev = v;
     v = down ? v / step : v * step;
     step = std::pow(step, std::max(1.0, opt.growth_accel));
-    if (v < opt.min_mps || v > opt.max_mps) break;
+    // A step past a bound fires once at the bound (growing steps overshoot it quickly);
+    // the search gives up only when the bound itself has been fired.
+    v = std::clamp(v, opt.min_mps, opt.max_mps);
+    if (v == prev) break;
     o = fire(v, "bracket");
     if (failed) break;
     if (o == perforated) {

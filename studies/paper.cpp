@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -61,6 +62,7 @@ struct LimitEntry {
   std::string error;
   bool keep_frame = false;
   double start_mps = NAN;  // where the search began (the velocity study's fit, or the fixed start)
+  std::string start_from;  // what that start is: "limit of mu=0.1", "fit", "default"
   Frame frame;             // lowest perforating run's final frame
   double frame_v = INFINITY;
 };
@@ -291,15 +293,22 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   lo.max_mps = 1000;
   // Where each search starts. Near the limit a run lasts 0.5-5 ms of simulated time (a
   // minute or more of wall time each), so a search that starts near its limit saves most of
-  // its cost. Searches are taken from a queue by `jobs` workers: the reference friction
-  // (0.2) first, then the lower frictions (0.1 down to 0: their runs near the limit are the
-  // longest, so they start early), then the higher ones and the pin-jointed model. Each
-  // search starts at the limit found for the nearest friction already done (the pin-jointed
-  // model: the highest friction's), with steps of 15 % that grow (growth_accel) until the
-  // outcome flips; with none done yet, at the Lambert-Jonas limit fitted to its friction's
-  // velocity runs (180-500 m/s): within ~10 % for mu >= 0.1 (86 against a bisected 78 m/s
-  // at mu = 0.2), but a factor 3 low for mu <= 0.02, where yarns slip aside with little
-  // energy at 180-500 m/s and the fit extrapolates from 4x the limit.
+  // its cost. Each search starts at the limit found by its parent in a fixed tree, so the
+  // numbers do not depend on --jobs or on which search finished first:
+  //   - the reference friction (0.2) and the lowest friction above it (0.4) are roots,
+  //     started at the Lambert-Jonas limit fitted to their own velocity runs (180-500 m/s;
+  //     within ~10 % for mu >= 0.1: 86 against a bisected 78 m/s at mu = 0.2);
+  //   - below the reference, in descending order b0, b1, ...: b0 from the reference, each
+  //     odd b(k) from b(k-1) and each even one from b(k-2) (0.1 <- 0.2, 0.06 <- 0.1,
+  //     0.02 <- 0.1, 0 <- 0.02), so that two branches can run at once;
+  //   - above it each from the next lower (0.6 <- 0.4, ...), the pin-jointed model from the
+  //     highest friction.
+  // A seeded search takes steps of 15 % that grow (growth_accel) until the outcome flips. A
+  // root with no fit, or a search whose parent found no limit, starts at its own fit, else at
+  // 75 m/s. The fits are a factor 3 low for mu <= 0.02 (yarns slip aside with little energy
+  // at 180-500 m/s and the fit extrapolates from 4x the limit), so those are never roots.
+  // Workers take the first ready search in the order: the reference, the frictions below it
+  // (their runs near the limit are the longest), then those above, then the pin-jointed model.
   std::map<double, double> fitted_by_mu;  // mu -> fitted limit, where the fit worked
   for (double mu : plan.frictions) {
     std::vector<double> vs, vrs;
@@ -312,37 +321,45 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     const LambertJonas f = fit_lambert_jonas(vs, vrs);
     if (f.ok && f.vbl_mps > lo.min_mps) fitted_by_mu[mu] = f.vbl_mps;
   }
-  std::vector<size_t> order;  // search order: reference, below it descending, above ascending, pin-jointed
-  for (size_t i = 0; i < limits.size(); ++i)
-    if (std::isfinite(limits[i].mu) && same(limits[i].mu, kReferenceFriction)) order.push_back(i);
-  for (size_t i = limits.size(); i-- > 0;)
-    if (std::isfinite(limits[i].mu) && limits[i].mu < kReferenceFriction - 1e-12) order.push_back(i);
-  for (size_t i = 0; i < limits.size(); ++i)
-    if (std::isfinite(limits[i].mu) && limits[i].mu > kReferenceFriction + 1e-12) order.push_back(i);
-  for (size_t i = 0; i < limits.size(); ++i)
-    if (!std::isfinite(limits[i].mu)) order.push_back(i);
+  std::vector<size_t> below, above, order;  // below: descending; above: ascending
+  size_t ref = limits.size(), pin = limits.size();
+  for (size_t i = 0; i < limits.size(); ++i) {
+    if (!std::isfinite(limits[i].mu))
+      pin = i;
+    else if (same(limits[i].mu, kReferenceFriction))
+      ref = i;
+    else
+      (limits[i].mu < kReferenceFriction ? below : above).push_back(i);
+  }
+  std::sort(below.begin(), below.end(), [&](size_t a, size_t b) { return limits[a].mu > limits[b].mu; });
+  std::sort(above.begin(), above.end(), [&](size_t a, size_t b) { return limits[a].mu < limits[b].mu; });
+  const size_t none = limits.size();
+  std::vector<size_t> parent(limits.size(), none);  // none: a root
+  for (size_t k = 0; k < below.size(); ++k) parent[below[k]] = k == 0 ? ref : below[k % 2 ? k - 1 : k - 2];
+  for (size_t k = 1; k < above.size(); ++k) parent[above[k]] = above[k - 1];
+  if (pin < none) parent[pin] = !above.empty() ? above.back() : ref;
+  if (ref < none) order.push_back(ref);
+  for (size_t i : below) order.push_back(i);
+  for (size_t i : above) order.push_back(i);
+  if (pin < none) order.push_back(pin);
   int limit_runs = 0;
   {
     std::mutex mu;
+    std::condition_variable finished_cv;  // a search finished (its children may start)
     int done = 0;
-    size_t next = 0;
-    std::map<double, double> found;  // mu (pin-jointed: +inf) -> limit, of the searches done
-    // The start of a search: the nearest friction already searched, else its own fit.
-    auto seed_for = [&](const LimitEntry& e) -> double {
-      const double key = std::isfinite(e.mu) ? e.mu : HUGE_VAL;
-      double best = -1, dist = HUGE_VAL;
-      for (const auto& [m, bl] : found) {
-        // Frictions by distance; the pin-jointed model (key +inf) nearest the highest friction,
-        // and never a seed for a friction.
-        double d = HUGE_VAL;
-        if (std::isfinite(key) && std::isfinite(m))
-          d = std::abs(m - key);
-        else if (!std::isfinite(key))
-          d = std::isfinite(m) ? 1e9 - m : 0;
-        if (d < dist) dist = d, best = bl;
+    std::vector<char> taken(limits.size(), 0), finished(limits.size(), 0);
+    // The start of a search: its parent's limit, else its own fit, else the default (-1).
+    auto seed_for = [&](size_t i) -> double {
+      const size_t p = parent[i];
+      if (p < none && limits[p].have && limits[p].result.bracketed) {
+        limits[i].start_from = "limit of " + limits[p].label;
+        return limits[p].result.ballistic_limit_mps;
       }
-      if (best > 0) return best;
-      if (std::isfinite(e.mu) && fitted_by_mu.count(e.mu)) return fitted_by_mu[e.mu];
+      if (std::isfinite(limits[i].mu) && fitted_by_mu.count(limits[i].mu)) {
+        limits[i].start_from = "fit";
+        return fitted_by_mu[limits[i].mu];
+      }
+      limits[i].start_from = "default";
       return -1;
     };
     auto run_entry = [&](LimitEntry& e, double seed) {
@@ -384,20 +401,37 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
     };
     auto worker = [&] {
       for (;;) {
-        if (interrupt && interrupt->load()) return;
-        size_t i = 0;
+        size_t i = none;
         double seed = -1;
         {
-          std::lock_guard<std::mutex> lock(mu);
-          if (next >= order.size()) return;
-          i = order[next++];
-          seed = seed_for(limits[i]);
+          std::unique_lock<std::mutex> lock(mu);
+          for (;;) {
+            if (interrupt && interrupt->load()) return;
+            bool left = false;
+            for (size_t j : order) {
+              if (taken[j]) continue;
+              left = true;
+              if (parent[j] == none || finished[parent[j]]) {
+                i = j;
+                break;
+              }
+            }
+            if (!left) return;
+            if (i < none) break;
+            // Every search left waits for a parent still running: wait for one to finish
+            // (waking now and then to see an interrupt).
+            finished_cv.wait_for(lock, std::chrono::milliseconds(200));
+          }
+          taken[i] = 1;
+          seed = seed_for(i);
         }
-        LimitEntry& e = limits[i];
-        run_entry(e, seed);
-        std::lock_guard<std::mutex> lock(mu);
-        if (e.have && e.result.bracketed) found[std::isfinite(e.mu) ? e.mu : HUGE_VAL] = e.result.ballistic_limit_mps;
-        progress("ballistic limits", ++done, int(limits.size()));
+        run_entry(limits[i], seed);
+        {
+          std::lock_guard<std::mutex> lock(mu);
+          finished[i] = 1;
+          progress("ballistic limits", ++done, int(limits.size()));
+        }
+        finished_cv.notify_all();
       }
     };
     std::vector<std::thread> pool;
@@ -977,7 +1011,9 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
       md << num(e.result.ballistic_limit_mps, "%.1f") << " | " << num(e.result.lo_mps, "%.1f") << " - "
          << num(e.result.hi_mps, "%.1f") << (e.result.converged ? "" : " (not converged: see warnings)") << " | "
          << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | "
-         << (std::isfinite(e.start_mps) ? num(e.start_mps, "%.1f") : std::string("(resumed)")) << " |\n";
+         << (std::isfinite(e.start_mps) ? num(e.start_mps, "%.1f") + " (" + e.start_from + ")"
+                                        : std::string("(resumed)"))
+         << " |\n";
     else
       md << "not found: "
          << (!e.error.empty()             ? e.error
@@ -986,11 +1022,12 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
          << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | |\n";
   }
   md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). The searches "
-        "run "
-        "from a queue (mu = 0.2 first, then the lower frictions, then the higher ones and the pin-jointed model); each "
-        "starts at the limit found for the nearest friction already searched (with none yet, at the Lambert-Jonas "
-        "limit fitted to its friction's velocity-study runs) and steps by 15 % (then 23, 37, 60 %) until the outcome "
-        "flips, then bisects.\n\n";
+        "start from a fixed tree, so the numbers do not depend on --jobs: mu = 0.2 and 0.4 at the Lambert-Jonas limit "
+        "fitted to their velocity-study runs; below 0.2, 0.1 from 0.2, 0.06 and 0.02 from 0.1, 0 from 0.02; above, "
+        "each "
+        "from the next lower friction, the pin-jointed model from the highest (with no parent limit, at its own fit, "
+        "else 75 m/s). Each search steps by 15 % from its start (25 % from 75 m/s), the steps growing (23, 37, 60 %) "
+        "until the outcome flips, then bisects.\n\n";
 
   md << "## Perforation images\n\n";
   if (images.empty()) md << "No images (this build has no offscreen renderer).\n\n";

@@ -59,11 +59,15 @@ struct GuiApp {
   // The frame on screen and its time (the scrubbed one, or the run's latest).
   const Frame& shown() const { return live ? view.frame : scrub_frame; }
   std::uint64_t shown_serial() const { return live ? view.frame_serial : (std::uint64_t(1) << 62) + scrub_serial; }
-  // Show kept frame closest at or before t (seconds); goes live again at the run's end.
+  // Show the kept frame nearest to t (seconds). It stays a kept frame even at the run's
+  // newest one: go_live() (the Live button, End key) follows the run again.
   void scrub_to(double t_s);
   void go_live() { live = true; }
 
   Picked picked;
+  // The size of the model the pick was made on (nodes, elements, crossings): a run of a
+  // different model clears the pick, since its numbers name other parts.
+  std::array<std::size_t, 3> picked_model{0, 0, 0};
 
   Scene draft;                // what the Scene / Projectile / Solver panels edit
   bool auto_restart = false;  // restart as soon as a panel value changes

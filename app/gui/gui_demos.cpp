@@ -57,17 +57,20 @@ CompareMode::CompareMode() : cache_(std::make_unique<Cache>()) {}
 CompareMode::~CompareMode() = default;
 
 void CompareMode::start(GuiApp& app, const demos::Demo& demo, const std::vector<Scene>& scenes) {
-  workers_.clear();
-  views_.clear();
+  // The new runs are built aside first: a scene that cannot be built (too big, say) throws
+  // here and leaves the comparison on show, and the single run, as they were.
+  std::vector<std::unique_ptr<SimWorker>> workers;
+  for (const Scene& s : scenes) {
+    workers.push_back(std::make_unique<SimWorker>(s, /*start_paused=*/true));
+    workers.back()->queue_frames(true);  // every run keeps its frames for the shared slider
+    workers.back()->set_pacing(Pacing{true, 0});
+    workers.back()->pause_at(0);
+  }
+  for (auto& w : workers_) w->request_exit();
+  workers_ = std::move(workers);  // the old ones join as they go
+  views_.assign(workers_.size(), WorkerView{});
   demo_ = demo;
   app.worker->pause();  // the single run waits behind the comparison
-  for (const Scene& s : scenes) {
-    workers_.push_back(std::make_unique<SimWorker>(s, /*start_paused=*/true));
-    workers_.back()->queue_frames(true);  // every run keeps its frames for the shared slider
-    workers_.back()->set_pacing(Pacing{true, 0});
-    workers_.back()->pause_at(0);
-    views_.emplace_back();
-  }
   clock_.reset();
   clock_.set_rate(demo.slow_motion_us_per_s * 1e-6);
   key_ = 0;

@@ -5,10 +5,15 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "gui_app.h"
 #include "gui_jobs.h"
@@ -24,8 +29,37 @@ void set_notice(GuiApp& app, const std::string& text, bool error) {
   app.notice_is_error = error;
 }
 
-bool have_ffmpeg() {
-  return std::system("command -v ffmpeg >/dev/null 2>&1") == 0;
+// Runs a program with these arguments (no shell, so no quoting of paths), its output
+// discarded. Returns its exit status, 127 when it cannot be started.
+int run_program(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return 127;
+  if (pid == 0) {
+    // Only async-signal-safe calls between fork and exec (the app has other threads).
+    const int null = open("/dev/null", O_WRONLY);
+    if (null >= 0) dup2(null, 1), dup2(null, 2);
+    execvp(args[0], args.data());
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return 127;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+// The files an earlier export left in the folder (frame_*.png, frame_*.vtu, frame.pvd,
+// movie.mp4): removed so that the folder holds this export only.
+void clear_old_frames(const std::string& dir) {
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string(), ext = e.path().extension().string();
+    if ((name.rfind("frame_", 0) == 0 && (ext == ".png" || ext == ".vtu")) || name == "frame.pvd" ||
+        name == "movie.mp4")
+      std::filesystem::remove(e.path(), ec);
+  }
 }
 
 std::vector<double> kept_times(const Timeline& tl) {
@@ -49,6 +83,7 @@ bool start_job(GuiApp& app, ExportJob::Kind kind, const std::string& dir) {
     set_notice(app, std::string("export failed: ") + e.what(), true);
     return false;
   }
+  clear_old_frames(dir);
   auto job = std::make_unique<ExportJob>();
   job->kind = kind;
   job->dir = dir;
@@ -122,8 +157,8 @@ void step_export(GuiApp& app, render::Renderer& renderer, int, int) {
   if (!export_running(app)) return;
   ExportJob& j = *app.export_job;
   if (app.view.run_id != j.run_id) {
-    j.error = "the run was restarted during the export; " + std::to_string(j.next) + " of " + std::to_string(j.total) +
-              " frames written";
+    j.error = "the run was restarted during the export; " + std::to_string(j.written) + " of " +
+              std::to_string(j.total) + " frames written";
     j.done = true;
   }
   const auto& times = j.times;
@@ -135,13 +170,14 @@ void step_export(GuiApp& app, render::Renderer& renderer, int, int) {
     char name[64];
     std::string error;
     if (j.kind == ExportJob::Kind::vtk) {
-      std::snprintf(name, sizeof name, "frame_%05zu.vtu", j.entries.size());
+      std::snprintf(name, sizeof name, "frame_%05zu.vtu", j.written);
       if (!write_vtu(f, j.dir + "/" + name, true, &error)) {
         j.error = error;
         j.done = true;
         break;
       }
       j.entries.push_back({f.time_s, name});
+      ++j.written;
       if (!write_pvd(j.dir + "/frame.pvd", j.entries, &error)) {
         j.error = error;
         j.done = true;
@@ -151,10 +187,13 @@ void step_export(GuiApp& app, render::Renderer& renderer, int, int) {
       j.target.bind();
       renderer.draw(f, j.camera, j.options, 0, 0, j.width, j.height);
       render::RenderTarget::bind_window();
-      std::snprintf(name, sizeof name, "frame_%05zu.png", j.next);
+      // Numbered by images written, so that the series has no gaps for ffmpeg's pattern.
+      std::snprintf(name, sizeof name, "frame_%05zu.png", j.written);
       if (!render::write_png(j.dir + "/" + name, j.width, j.height, j.target.read_rgb(), &error)) {
         j.error = error;
         j.done = true;
+      } else {
+        ++j.written;
       }
     }
   }
@@ -162,29 +201,32 @@ void step_export(GuiApp& app, render::Renderer& renderer, int, int) {
     j.done = true;
     if (j.kind == ExportJob::Kind::images) {
       j.target.release();
-      if (have_ffmpeg()) {
-        const std::string out = j.dir + "/movie.mp4", tmp = j.dir + "/.movie.tmp.mp4";
-        const std::string cmd = "ffmpeg -y -loglevel error -framerate 24 -i '" + j.dir +
-                                "/frame_%05d.png' -pix_fmt yuv420p -vcodec libx264 '" + tmp + "' >/dev/null 2>&1";
-        std::error_code ec;
-        if (std::system(cmd.c_str()) == 0) {
-          std::filesystem::rename(tmp, out, ec);
-          if (!ec) j.mp4 = out;
-        }
-        std::filesystem::remove(tmp, ec);
+      const std::string out = j.dir + "/movie.mp4", tmp = j.dir + "/.movie.tmp.mp4";
+      const int rc =
+          run_program({"ffmpeg", "-y", "-loglevel", "error", "-framerate", "24", "-i", j.dir + "/frame_%05d.png",
+                       "-pix_fmt", "yuv420p", "-vcodec", "libx264", "-f", "mp4", tmp});
+      std::error_code ec;
+      if (rc == 0) {
+        std::filesystem::rename(tmp, out, ec);
+        if (!ec)
+          j.mp4 = out;
+        else
+          j.mp4_status = "the movie could not be renamed into place: " + ec.message();
+      } else {
+        j.mp4_status = rc == 127 ? "no ffmpeg: no movie" : "ffmpeg failed (exit " + std::to_string(rc) + "): no movie";
       }
+      std::filesystem::remove(tmp, ec);
     }
   }
   if (j.done) {
     if (!j.error.empty()) {
       set_notice(app, "export into " + j.dir + " failed: " + j.error, true);
     } else if (j.kind == ExportJob::Kind::vtk) {
-      set_notice(app, "wrote " + std::to_string(j.entries.size()) + " frames: " + j.dir + "/frame.pvd (ParaView)",
-                 false);
+      set_notice(app, "wrote " + std::to_string(j.written) + " frames: " + j.dir + "/frame.pvd (ParaView)", false);
     } else {
       set_notice(app,
-                 "wrote " + std::to_string(j.total) + " images into " + j.dir +
-                     (j.mp4.empty() ? std::string(" (no ffmpeg: no movie)") : ", and " + j.mp4),
+                 "wrote " + std::to_string(j.written) + " images into " + j.dir +
+                     (j.mp4.empty() ? " (" + j.mp4_status + ")" : ", and " + j.mp4),
                  false);
     }
     std::printf("ravel gui: %s\n", app.notice.c_str());

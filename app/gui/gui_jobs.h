@@ -27,6 +27,7 @@ struct ExportJob {
   std::string dir;
   std::vector<double> times;        // the kept frames' times when it started (the timeline may thin)
   std::size_t next = 0, total = 0;  // kept frames done / to do
+  std::size_t written = 0;          // files written (frames thinned away meanwhile are skipped)
   long run_id = -1;                 // the run whose frames these are
   std::vector<PvdEntry> entries;    // vtk: the series so far
   render::RenderTarget target;      // images: drawn here at the view's size
@@ -35,7 +36,8 @@ struct ExportJob {
   int width = 0, height = 0;
   std::string error;
   bool done = false;
-  std::string mp4;  // images: the movie written (ffmpeg), if any
+  std::string mp4;         // images: the movie written (ffmpeg), if any
+  std::string mp4_status;  // images: why there is no movie (no ffmpeg, or ffmpeg failed)
 };
 
 // A ballistic-limit search on a background thread (the Studies window's limit tab).

@@ -166,18 +166,25 @@ bool open_scene(GuiApp& app, const std::string& path_in) {
     CommonArgs a;
     a.scene_path = path;
     Scene s = load_scene(scene_path_from(a));
-    app.draft = s;
-    app.open_error.clear();
+    // The panels edit the opened scene only once its run has started: a refusal (too big
+    // for memory, say) leaves the draft, and the run, as they were.
+    Scene before = std::move(app.draft);
+    app.draft = std::move(s);
     app.scene_error.clear();
+    if (!restart_with_draft(app)) {
+      app.open_error = app.scene_error;
+      app.notice = "open: " + app.scene_error;
+      app.notice_is_error = true;
+      app.draft = std::move(before);
+      app.scene_error.clear();
+      return false;
+    }
+    app.open_error.clear();
     app.recent_scenes.erase(std::remove(app.recent_scenes.begin(), app.recent_scenes.end(), path),
                             app.recent_scenes.end());
     app.recent_scenes.push_front(path);
     while (app.recent_scenes.size() > 8) app.recent_scenes.pop_back();
     app.camera_needs_fit = true;
-    if (!restart_with_draft(app)) {
-      app.open_error = app.scene_error;
-      return false;
-    }
     app.notice = "opened " + path;
     app.notice_is_error = false;
     return true;

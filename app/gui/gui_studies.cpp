@@ -109,6 +109,11 @@ std::string default_dir(const GuiApp& app, const char* sub) {
 bool start_sweep(GuiApp& app, const std::vector<std::string>& vary_lines) {
   StudiesWindow& w = *app.studies;
   if (!*w.sweep_dir) std::snprintf(w.sweep_dir, sizeof w.sweep_dir, "%s", default_dir(app, "sweep").c_str());
+  // A running sweep reads its scene file: do not rewrite it under it.
+  if (w.sweep.running()) {
+    w.sweep_error = "a sweep is running";
+    return false;
+  }
   try {
     studies::SweepOptions o;
     o.out_dir = w.sweep_dir;
@@ -128,6 +133,10 @@ bool start_sweep(GuiApp& app, const std::vector<std::string>& vary_lines) {
 bool start_limit(GuiApp& app) {
   StudiesWindow& w = *app.studies;
   if (!*w.limit_dir) std::snprintf(w.limit_dir, sizeof w.limit_dir, "%s", default_dir(app, "limit").c_str());
+  if (w.limit.running()) {  // it reads its scene file: do not rewrite it under it
+    w.limit_error = "a search is running";
+    return false;
+  }
   try {
     const std::string scene = write_scene(app, std::string(w.limit_dir) + "/.scene");
     w.limit_error.clear();

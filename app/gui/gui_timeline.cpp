@@ -15,6 +15,11 @@ namespace ravel::app::gui {
 GuiApp::GuiApp() : studies(std::make_unique<StudiesWindow>()) {}
 GuiApp::~GuiApp() = default;
 
+// The size of the model a frame shows (nodes, elements, crossings): a pick names parts of it.
+static std::array<std::size_t, 3> model_size(const Frame& f) {
+  return {f.node_pos.size(), f.elem_a.size(), f.crossing_warp_node.size()};
+}
+
 void GuiApp::scrub_to(double t_s) {
   if (timeline.empty()) return;
   // The kept frame nearest to t.
@@ -32,11 +37,10 @@ void update_timeline(GuiApp& app) {
     app.timeline.reset(app.view.run_id);
     app.live = true;
     app.timeline_serial = 0;
-    // The same scene keeps its numbering: a pick survives Reset; a new scene may not have it.
-    if (app.picked.element >= int(app.view.frame.elem_a.size()) ||
-        app.picked.crossing >= int(app.view.frame.crossing_warp_node.size()))
-      app.picked = Picked{};
   }
+  // The same model keeps its numbering: a pick survives Reset; a different one clears it.
+  if (app.picked.any() && !app.view.frame.node_pos.empty() && model_size(app.view.frame) != app.picked_model)
+    app.picked = Picked{};
   // Every frame the worker published since the last sync (queue_frames), then the newest.
   for (const auto& [f, step] : app.view.new_frames) app.timeline.add(f, step);
   app.view.new_frames.clear();
@@ -45,8 +49,8 @@ void update_timeline(GuiApp& app) {
     app.timeline_serial = app.view.frame_serial;
   }
   // Thinning may have dropped the frame on show: keep showing the nearest one kept.
-  if (!app.live && !app.timeline.empty() && app.scrub_index < app.timeline.size() &&
-      app.timeline.time(app.scrub_index) != app.scrub_frame.time_s) {
+  if (!app.live && !app.timeline.empty() &&
+      (app.scrub_index >= app.timeline.size() || app.timeline.time(app.scrub_index) != app.scrub_frame.time_s)) {
     const double t = app.scrub_frame.time_s;
     app.scrub_index = app.timeline.index_at(t);
     app.scrub_frame = app.timeline.frame(app.scrub_index);
@@ -143,6 +147,7 @@ void pick_at(GuiApp& app, float x, float y, bool crossing) {
   app.picked.crossing = p.crossing;
   app.picked.copy = p.copy;
   app.picked.mirror = p.mirror;
+  app.picked_model = model_size(app.view.frame);
 }
 
 void pick_element(GuiApp& app, int element) {
@@ -154,6 +159,7 @@ void pick_element(GuiApp& app, int element) {
     return;
   }
   app.picked.element = element;
+  app.picked_model = model_size(app.view.frame);
   report_pick(app);
 }
 
@@ -166,6 +172,7 @@ void pick_crossing(GuiApp& app, int crossing) {
     return;
   }
   app.picked.crossing = crossing;
+  app.picked_model = model_size(app.view.frame);
   report_pick(app);
 }
 

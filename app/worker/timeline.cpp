@@ -49,8 +49,8 @@ void Timeline::reset(long run_id) {
 
 void Timeline::add(const Frame& f, long step) {
   if (f.node_pos.empty()) return;
-  ++seen_;
   if (!kept_.empty() && f.time_s <= kept_.back().time_s) return;  // nothing new
+  ++seen_;
   if (kept_.empty()) {
     skeleton_ = f;  // the parts that do not change; the per-frame arrays are dropped below
     for (auto* v : {&skeleton_.node_pos, &skeleton_.node_vel}) v->clear(), v->shrink_to_fit();

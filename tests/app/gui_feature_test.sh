@@ -141,6 +141,8 @@ EOF
   ;;
 
 export)
+  # A stale frame from an earlier export is cleared, so the folder holds this export only.
+  mkdir -p "$out/images" && printf 'old' >"$out/images/frame_99999.png"
   run_gui 1024 640 --frames 10 --pause-at-us 12 --export-dir "$out/exp" --do 1:play --do 2:wait \
     --do 3:export-vtk:"$out/vtk" --do 4:wait --do 5:record:"$out/images" --do 6:wait
   cat log.txt
@@ -151,6 +153,11 @@ export)
   [ "$n_vtu" -ge 3 ] && [ "$n_vtu" -eq "$n_pvd" ] || fail "$n_vtu VTU files, $n_pvd in the PVD"
   n_png=$(ls images/frame_*.png | wc -l)
   [ "$n_png" -eq "$n_vtu" ] || fail "$n_png images for $n_vtu kept frames"
+  [ -e images/frame_99999.png ] && fail "a stale image of an earlier export was left"
+  # Numbered without gaps (ffmpeg's frame_%05d pattern reads them in order), and the notice
+  # counts the images written.
+  [ -e "images/frame_$(printf %05d $((n_png - 1))).png" ] || fail "the images are not numbered 0 to $((n_png - 1))"
+  grep -q "wrote $n_png images into" log.txt || fail "the notice does not report $n_png images written"
   ls vtk images | grep -q '\.tmp' && fail "temporary files left"
   ;;
 

@@ -64,6 +64,29 @@ TEST(BallisticLimit, ReportsNoBracketAndFailedRuns) {
   EXPECT_FALSE(r.warnings.empty());
 }
 
+// Growing steps overshoot a bound quickly: the search fires once at the bound before it
+// gives up, so a limit between the last step and the bound is still bracketed.
+TEST(BallisticLimit, GrowingStepsFireAtTheBoundBeforeGivingUp) {
+  LimitOptions o;
+  o.start_mps = 100;
+  o.growth = 1.25;
+  o.growth_accel = 1.5;  // 100, 125, 175, 288, then 611: past the bound
+  o.max_mps = 500;
+  o.tolerance_mps = 1;
+  const auto r = find_ballistic_limit(synthetic_target(0.9, 2.0, 480), o, false);
+  ASSERT_TRUE(r.bracketed);
+  EXPECT_NEAR(r.ballistic_limit_mps, 480, 0.5 + 1e-12);
+  bool at_bound = false;
+  for (const auto& s : r.runs) at_bound |= s.velocity_mps == 500;
+  EXPECT_TRUE(at_bound);
+  // With the limit beyond the bound, the last run is at the bound, and there is no bracket.
+  const auto none = find_ballistic_limit(synthetic_target(0.9, 2.0, 520), o, false);
+  EXPECT_FALSE(none.bracketed);
+  ASSERT_FALSE(none.runs.empty());
+  EXPECT_EQ(none.runs.back().velocity_mps, 500);
+  EXPECT_EQ(none.runs.size(), 5u);
+}
+
 // Runs that end neither perforated nor stopped (undecided) never count as stopped: they are
 // left out of the bracket, and the bisection goes on beside them. Here every run within
 // 3 m/s below the true limit is undecided: the bracket's ends are decided runs, so the limit
