@@ -253,6 +253,50 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   return res;
 }
 
+std::string limit_progress(const std::vector<Shot>& runs, const LimitOptions& opt, bool with_fit) {
+  double lo = -1, hi = -1, run_time = 0;
+  int perforated = 0, stopped = 0, fits = 0, timed = 0;
+  for (const auto& s : runs) {
+    if (s.purpose == "fit") ++fits;
+    if (!s.resumed) run_time += s.wall_time_s, ++timed;
+    if (s.failed || s.purpose == "fit") continue;
+    if (s.perforated) {
+      ++perforated;
+      hi = hi < 0 ? s.velocity_mps : std::min(hi, s.velocity_mps);
+    } else if (s.decided) {
+      ++stopped;
+      lo = std::max(lo, s.velocity_mps);
+    }
+  }
+  const int k = int(runs.size());
+  char b[200];
+  if (lo < 0 || hi < 0 || lo >= hi) {
+    std::snprintf(b, sizeof b, "run %d, bracketing (%d perforated, %d stopped)", k, perforated, stopped);
+    return b;
+  }
+  // Each bisection halves the bracket; the fit's runs follow at the limit times each factor.
+  int left = hi - lo > opt.tolerance_mps ? int(std::ceil(std::log2((hi - lo) / opt.tolerance_mps))) : 0;
+  if (with_fit) {
+    int planned = 0;
+    for (double f : opt.fit_factors) planned += 0.5 * (lo + hi) * f <= opt.max_mps;
+    left += std::max(0, planned - fits);
+  }
+  if (left == 0) {
+    std::snprintf(b, sizeof b, "run %d of %d, bracket %.2f - %.2f m/s", k, k, lo, hi);
+    return b;
+  }
+  const double mean = timed > 0 ? run_time / timed : 0;
+  const double t = left * mean;
+  if (mean <= 0)
+    std::snprintf(b, sizeof b, "run %d of about %d, bracket %.2f - %.2f m/s", k, k + left, lo, hi);
+  else if (t < 120)
+    std::snprintf(b, sizeof b, "run %d of about %d, bracket %.2f - %.2f m/s, ~%.0f s left", k, k + left, lo, hi, t);
+  else
+    std::snprintf(b, sizeof b, "run %d of about %d, bracket %.2f - %.2f m/s, ~%.1f min left", k, k + left, lo, hi,
+                  t / 60);
+  return b;
+}
+
 namespace {
 
 nlohmann::ordered_json shot_to_json(const Shot& s) {

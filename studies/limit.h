@@ -77,6 +77,12 @@ struct LimitResult {
 
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
 
+// A progress line for a search that has made `runs` so far: "run k of about N, ~T left"
+// once the outcomes bracket the limit (N = k + the bisections that take the bracket below
+// the tolerance + the fit runs still to make; T from the mean time of the runs made here),
+// "run k, bracketing (P perforated, S stopped)" before.
+std::string limit_progress(const std::vector<Shot>& runs, const LimitOptions& opt, bool with_fit);
+
 // A ShootFn that runs `scene_path` with `overrides` plus projectile.velocity_mps=V.
 // `on_run` (optional) sees each finished Simulation (e.g. to keep a frame). A diverged
 // run comes back with failed = true (the search stops there: a bracket built on it would

@@ -163,6 +163,8 @@ StabilityResult run_stability(const StabilityOptions& opt_in, const std::atomic<
     };
     const auto rep = run_sweep(cases, cases, so, {m.y.key, m.x.key}, hooks, interrupt);
     if (rep.interrupted) res.interrupted = true;
+    res.runs_made += rep.cases_run;
+    res.runs_kept += rep.cases_skipped;
     for (const auto& e : rep.errors) res.errors.push_back(m.name + ": " + e);
     for (const auto& c : cases) {
       StabilityCell cell;

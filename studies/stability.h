@@ -60,6 +60,8 @@ struct StabilityResult {
   std::vector<std::string> critical;                        // per dt map row: the model's critical_dt_factor, in words
   std::vector<std::pair<std::string, double>> critical_dt;  // (y value, critical_dt_factor) of the dt map
   double wall_time_s = 0;
+  int runs_made = 0;  // run by this invocation
+  int runs_kept = 0;  // finished by an earlier, interrupted one (DIR/<map>/<case>/ kept)
   bool interrupted = false;
   std::vector<std::string> errors;
 };

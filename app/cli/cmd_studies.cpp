@@ -178,6 +178,7 @@ int cmd_limit(const Args& args) {
     auto shoot = studies::scene_shooter(scene_path, ov, &interrupt_flag(), {}, a.out_dir);
     std::vector<studies::Shot> finished;
     int resumed = 0;
+    const bool with_fit = !has_switch(a, "no-fit");
     auto logged = [&](double v, const std::string& why) {
       auto s = shoot(v, why);
       s.purpose = why;
@@ -191,6 +192,7 @@ int cmd_limit(const Args& args) {
         if (s.perforated) std::printf(", residual %.1f m/s", s.residual_velocity_mps);
         if (s.failed) std::printf(" -- FAILED: %s", s.error.c_str());
         std::printf(s.resumed ? "  [kept from an earlier run, %.1f s]\n" : "  [%.1f s]\n", s.wall_time_s);
+        std::printf("    %s\n", studies::limit_progress(finished, lo, with_fit).c_str());
         std::fflush(stdout);
       }
       return s;
@@ -200,7 +202,7 @@ int cmd_limit(const Args& args) {
                   scene.name.c_str(), lo.tolerance_mps, scene.solver.max_end_time_s * 1e6);
     studies::LimitResult r;
     try {
-      r = studies::find_ballistic_limit(logged, lo, !has_switch(a, "no-fit"));
+      r = studies::find_ballistic_limit(logged, lo, with_fit);
     } catch (const std::exception& e) {
       if (interrupt_flag().load()) {
         // Keep what finished: limit.json lists the finished runs (no limit yet), and DIR/runs/

@@ -186,7 +186,8 @@ int cmd_stability(const Args& args) {
     std::fflush(stdout);
     const auto r = studies::run_stability(opt, &interrupt_flag());
     if (r.interrupted) {
-      std::fprintf(stderr, "ravel: interrupted; finished runs are kept, rerun to resume\n");
+      std::fprintf(stderr, "ravel: interrupted; %d finished runs are kept in %s/ (rerun the same command to resume)\n",
+                   r.runs_made + r.runs_kept, opt.out_dir.c_str());
       return exit_interrupted;
     }
     write_file_atomic(opt.out_dir + "/stability.csv", studies::stability_csv(r));
@@ -195,7 +196,9 @@ int cmd_stability(const Args& args) {
     std::snprintf(sub, sizeof sub, "%s at %.0f m/s unless varied", scene.name.c_str(), scene.projectile.velocity_mps);
     for (const auto& [stem, chart] : studies::stability_charts(r.cells, sub))
       studies::write_chart(chart, opt.out_dir + "/" + stem, 900, 420);
-    std::printf("stability: %zu cells in %.0f s\n", r.cells.size(), r.wall_time_s);
+    std::printf("stability: %zu cells in %.0f s", r.cells.size(), r.wall_time_s);
+    if (r.runs_kept > 0) std::printf(" (%d run now, %d kept from an earlier run)", r.runs_made, r.runs_kept);
+    std::printf("\n");
     for (const auto& s : studies::stability_sentences(r)) std::printf("  %s\n", s.c_str());
     for (const auto& e : r.errors) std::fprintf(stderr, "ravel: %s\n", e.c_str());
     std::printf("  %s/stability.{csv,md}, %s/stability_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());

@@ -149,6 +149,25 @@ out=$("$ravel" limit "$tmp/pt.toml" --out "$tmp/lim" 2>&1)
 grep -q '"interrupted": false' "$tmp/lim/limit.json" && grep -q '"converged": true' "$tmp/lim/limit.json" && ok ||
   bad "resumed limit did not finish"
 
+# --- Ctrl-C on ravel stability keeps the finished cells; the same command resumes from them.
+st=("$tmp/pt.toml" --quick --set fabric.width_mm=48 --set fabric.length_mm=48 --map dt_factor --jobs 1)
+"$ravel" stability "${st[@]}" --out "$tmp/stab" >"$tmp/stab1.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 300); do [ "$(ls "$tmp"/stab/dt_factor/*/summary.json 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.05; done
+kill -INT $pid
+wait $pid
+rc=$?
+[ $rc -eq 130 ] && ok || bad "interrupted stability: exit $rc: $(cat "$tmp/stab1.log")"
+kept=$(ls "$tmp"/stab/dt_factor/*/summary.json 2>/dev/null | wc -l)
+grep -q "ravel: interrupted; $kept finished runs are kept in $tmp/stab/" "$tmp/stab1.log" && ok ||
+  bad "interrupted stability: message does not name the $kept kept runs: $(cat "$tmp/stab1.log")"
+[ "$kept" -ge 2 ] && [ "$kept" -lt 12 ] && ok || bad "interrupted stability: $kept of 12 runs finished (the test proves nothing)"
+[ -e "$tmp/stab/stability.csv" ] && bad "an interrupted stability wrote stability.csv" || ok
+out=$("$ravel" stability "${st[@]}" --out "$tmp/stab" 2>&1)
+grep -q "stability: 12 cells in [0-9]* s ($((12 - kept)) run now, $kept kept from an earlier run)" <<<"$out" && ok ||
+  bad "resumed stability did not reuse the $kept kept runs: $out"
+[ "$(($(wc -l <"$tmp/stab/stability.csv") - 1))" -eq 12 ] && ok || bad "resumed stability: stability.csv lacks cells"
+
 # --- A sweep says k of N and each case's outcome; a diverged case is not "done".
 out=$("$ravel" sweep "${small[@]/--quiet/}" --set solver.end_time_us=20 --vary solver.dt_factor=0.5,2 --jobs 1 --out "$tmp/swd" 2>&1)
 grep -qE '^  \[1/2\] solver.dt_factor=0.5: ' <<<"$out" && ok || bad "sweep progress line: $out"

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "limit.h"
 #include "study_test_util.h"
@@ -39,6 +40,58 @@ TEST(BallisticLimit, BracketsAndBisectsToTheTolerance) {
       EXPECT_LE(int(r.runs.size()), 8 + int(std::ceil(std::log2(100.0 / tol))));
       EXPECT_TRUE(r.warnings.empty());
       for (const auto& s : r.runs) EXPECT_EQ(s.perforated, s.velocity_mps >= vbl);
+    }
+  }
+}
+
+// `ravel limit`'s progress line: once bracketed, "of about N" counts the bisections that
+// halve the bracket below the tolerance and the fit runs still to make. On a sharp
+// threshold bisection halves the bracket exactly, so the estimate made after the first
+// bracketing run is the search's final length, and stays so to the end.
+TEST(BallisticLimit, ProgressLineCountsTheRunsStillToMake) {
+  for (double vbl : {12.3, 70.4, 433.3}) {
+    for (bool with_fit : {false, true}) {
+      SCOPED_TRACE("vbl " + std::to_string(vbl) + (with_fit ? " with fit" : ""));
+      LimitOptions o;
+      std::vector<Shot> made;
+      std::vector<std::string> lines;
+      const auto target = synthetic_target(0.9, 2.0, vbl);
+      auto shoot = [&](double v, const std::string& why) {
+        Shot s = target(v, why);
+        s.velocity_mps = v;
+        s.purpose = why;
+        s.wall_time_s = 30;
+        made.push_back(s);
+        lines.push_back(limit_progress(made, o, with_fit));
+        return s;
+      };
+      const auto r = find_ballistic_limit(shoot, o, with_fit);
+      ASSERT_TRUE(r.converged);
+      const int n = int(r.runs.size());
+      bool bracketed = false;
+      for (int k = 1; k <= n; ++k) {
+        const std::string& line = lines[size_t(k - 1)];
+        if (line.find("bracketing") != std::string::npos) {
+          EXPECT_FALSE(bracketed) << line;  // once bracketed, it stays so
+          EXPECT_EQ(line.rfind("run " + std::to_string(k) + ", bracketing (", 0), 0u) << line;
+          continue;
+        }
+        bracketed = true;
+        if (k == n) {
+          EXPECT_EQ(line.rfind("run " + std::to_string(n) + " of " + std::to_string(n) + ",", 0), 0u) << line;
+        } else {
+          EXPECT_EQ(line.rfind("run " + std::to_string(k) + " of about " + std::to_string(n) + ",", 0), 0u) << line;
+          // 30 s per run: (n - k) runs left.
+          const double left = 30.0 * (n - k);
+          char want[64];
+          if (left < 120)
+            std::snprintf(want, sizeof want, "~%.0f s left", left);
+          else
+            std::snprintf(want, sizeof want, "~%.1f min left", left / 60);
+          EXPECT_NE(line.find(want), std::string::npos) << line << " wants " << want;
+        }
+      }
+      EXPECT_TRUE(bracketed);
     }
   }
 }

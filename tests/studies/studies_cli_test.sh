@@ -56,9 +56,13 @@ head -1 "$WORK/sweep/results.csv" | grep -q '^case,projectile.velocity_mps,yarn.
 grep -q "0 run, 6 already finished" "$WORK/rerun.out" || fail "rerun: $(cat "$WORK/rerun.out")"
 
 # limit on the cheap scene: limit.json with the bracket, the fit and every run.
-"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --quiet --out "$WORK/limit" >"$WORK/limit.out" 2>&1
+"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --out "$WORK/limit" >"$WORK/limit.out" 2>&1
 rc=$?
 [[ $rc == 0 ]] || fail "limit exit $rc: $(cat "$WORK/limit.out")"
+# Progress: each run is followed by where the search stands, ending with "run N of N".
+grep -qE '^    run [0-9]+, bracketing \(' "$WORK/limit.out" || fail "limit: no bracketing progress line"
+n=$(/usr/bin/python3 -c 'import json,sys; print(len(json.load(open(sys.argv[1]))["runs"]))' "$WORK/limit/limit.json")
+grep -qE "^    run $n of $n, bracket " "$WORK/limit.out" || fail "limit: the last progress line is not run $n of $n: $(tail -3 "$WORK/limit.out")"
 for key in ballistic_limit_mps bracket_mps lambert_jonas runs; do
   grep -q "\"$key\"" "$WORK/limit/limit.json" || fail "limit.json lacks $key"
 done
