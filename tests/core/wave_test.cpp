@@ -76,25 +76,49 @@ TEST(SingleYarn, LongitudinalFrontRunsAtWaveSpeed) {
   EXPECT_NEAR(speed / c, 1.0, 0.024) << "measured " << speed << " m/s, theory " << c;
 }
 
-TEST(SingleYarn, StrainBehindTheFrontMatchesSmith) {
+// The strain plateau between the transverse and the longitudinal front, as a fraction of
+// Smith's strain, on a chain of elements h_rel x 0.844 mm struck by the 12 mm sphere.
+double plateau_over_smith(double v, double h_rel) {
+  auto ov = single_yarn(v);
+  char spacing[64], mass[64];
+  std::snprintf(spacing, sizeof spacing, "fabric.spacing_mm=%.9g", kL0 * h_rel * 1e3);
+  std::snprintf(mass, sizeof mass, "fabric.node_mass_g=%.9g", kRho * kA * kL0 * h_rel * 1e3);
+  ov.push_back(spacing);
+  ov.push_back(mass);  // rho A h: the chain's wave speed stays c
+  Simulation sim(test::scene_with(ov));
+  const double c = std::sqrt(kE / kRho);
+  test::run_until(sim, 15e-6);
+  const Profile p = profile(sim);
+  // Plateau: between the transverse front (U t from the centre) and the longitudinal
+  // front (c t), away from both.
+  const double t = sim.time_s();
+  const double eps_th = smith_strain(v, c);
+  const double U = c * (std::sqrt(eps_th * (1 + eps_th)) - eps_th);
+  double sum = 0;
+  int n = 0;
+  for (size_t e = 0; e < p.strain.size(); ++e)
+    if (p.y[e] > 1.3 * U * t + 6e-3 && p.y[e] < 0.8 * c * t) sum += p.strain[e], ++n;
+  EXPECT_GT(n, 10);
+  return n > 0 ? sum / n / eps_th : 0;
+}
+
+// Smith's plateau strain is exact for an elastic string once the transverse front has left
+// the projectile (the yarn leaves a blunt nose tangentially at the nose's speed, as it
+// leaves a point load), so the only error is the chain's: the 12 mm sphere touches the yarn
+// at nodes h apart, and the polygon it wraps misfits the strain by O(h). At the paper's
+// h = 0.844 mm that is 5.5 % at 50 m/s (the smallest kink angle, most sensitive to the
+// wrap), 1-2 % at 100-200 m/s. Checked: the error shrinks at least at first order as h
+// halves twice (|e(h/4)| <= 0.4 |e(h)|; first order gives 0.25), and the first-order
+// Richardson limit 2 e(h/4) - e(h/2) is within 1 % of Smith (what remains is the explicit
+// integration's and the plateau window's, both well under 1 %).
+TEST(SingleYarn, StrainBehindTheFrontConvergesToSmith) {
   for (double v : {50.0, 100.0, 200.0}) {
-    Simulation sim(test::scene_with(single_yarn(v)));
-    const double c = std::sqrt(kE / kRho);
-    test::run_until(sim, 15e-6);
-    const Profile p = profile(sim);
-    // Plateau: between the transverse front (U t from the centre) and the longitudinal
-    // front (c t), away from both.
-    const double t = sim.time_s();
-    const double eps_th = smith_strain(v, c);
-    const double U = c * (std::sqrt(eps_th * (1 + eps_th)) - eps_th);
-    double sum = 0;
-    int n = 0;
-    for (size_t e = 0; e < p.strain.size(); ++e)
-      if (p.y[e] > 1.3 * U * t + 6e-3 && p.y[e] < 0.8 * c * t) sum += p.strain[e], ++n;
-    ASSERT_GT(n, 10);
-    // Smith assumes a point load; a 12 mm sphere wraps the yarn over a few mm, which
-    // shifts the plateau by a few per cent at these strains.
-    EXPECT_NEAR(sum / n / eps_th, 1.0, 0.06) << "V = " << v << ": strain " << sum / n << " theory " << eps_th;
+    SCOPED_TRACE("V = " + std::to_string(v) + " m/s");
+    const double e1 = plateau_over_smith(v, 1.0) - 1, e2 = plateau_over_smith(v, 0.5) - 1,
+                 e4 = plateau_over_smith(v, 0.25) - 1;
+    EXPECT_LE(std::abs(e4), 0.4 * std::abs(e1)) << "e(h) " << e1 << ", e(h/2) " << e2 << ", e(h/4) " << e4;
+    EXPECT_LE(std::abs(e2), std::abs(e1));
+    EXPECT_NEAR(2 * e4 - e2, 0.0, 0.01) << "e(h/2) " << e2 << ", e(h/4) " << e4;
   }
 }
 
