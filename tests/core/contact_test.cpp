@@ -90,55 +90,73 @@ double warp_centre_y(const Solver& s, int n) {
   return y / n;
 }
 
-// Pressed with N at the crossing and pulled with T at its leading end. Below mu N the warp
-// sticks: it creeps by at most mu N / K (nanometres) and the friction force balances T.
-// Above, it slides and the friction force is mu f_n (f_n the normal force of Eq 11, which
-// the pressed, slightly sagging warp keeps within a few % of N). mu = 0 slides freely.
-// The pull starts after 20 us of pressing; the checks run over the next 60 us.
+// The warp of crossing_pair pressed with N at the crossing for 20 us, then pulled with T at
+// its leading end for 70 us. `moved` is its centre's displacement over the pull; `fn_drift`
+// is the displacement a force mu (f_n - N) would give it over the same time, f_n the
+// crossing's normal force as it evolves (the pull tilts the pressed warp a little). The
+// stick/slip state and the normal force's error are read from 10 us into the pull on,
+// when the sudden pull's first waves along the chain (which overshoot T) have passed.
+struct Pull {
+  double moved = 0, fn_drift = 0, max_fn_error = 0;
+  bool always_sliding = true, ever_sliding = false;
+};
+Pull pull_pressed_warp(double mu, double T, double N, int n) {
+  auto solver = make_solver(crossing_pair(mu, n), Precision::double_precision, 1);
+  solver->set_external_force(n / 2, Vec3d(0, 0, -N));
+  while (solver->time() < 20e-6) solver->step();
+  EXPECT_NEAR(solver->crossing_normal_force(0), N, 1e-3 * N);
+  solver->set_external_force(n - 1, Vec3d(0, T, 0));
+  const double y0 = warp_centre_y(*solver, n), t0 = solver->time(), dt = solver->model().dt;
+  Pull p;
+  double v = 0;
+  while (solver->time() < t0 + 70e-6) {
+    solver->step();
+    const double fn = solver->crossing_normal_force(0);
+    v += mu * (fn - N) / (n * kMass) * dt;
+    p.fn_drift += v * dt;
+    if (solver->time() > t0 + 10e-6) {  // after the pull's first waves have rung out
+      p.max_fn_error = std::max(p.max_fn_error, std::abs(fn - N));
+      const bool sliding = solver->crossing_sliding(0);
+      p.always_sliding &= sliding;
+      p.ever_sliding |= sliding;
+    }
+  }
+  p.moved = warp_centre_y(*solver, n) - y0;
+  return p;
+}
+
+// Coulomb's law checked by the motion it produces. The warp is pressed onto the clamped weft
+// with N and pulled along its length with T. Below mu N it sticks: it creeps by at most
+// mu N / K (nanometres) where free it would move tens of micrometres. Above, it slides, and
+// a sliding friction of mu f_n makes it move exactly as a frictionless pull of T - mu N
+// would (the same path, so the same geometric forces of the sagging warp on the crossing),
+// apart from mu (f_n - N), whose effect `fn_drift` is added back (at T = 3 mu N the pressed
+// node passes the crossing within the 70 us and f_n strays from N by up to N). What remains is the
+// friction force's own error, bounded at 2 % of what friction takes away (mu N t^2 / 2M):
+// friction acts along the slip at the contact, which the sag tilts a few degrees out of the
+// pull's line (cos 10 deg = 0.985); measured 0.2-0.7 %. A friction force wrong by 5 % in
+// magnitude, or acting on the wrong side of the stick/slip threshold, fails it.
 TEST(Friction, FollowsCoulombsLaw) {
   const int n = 5;
-  const double N = 0.1;
-  for (double mu : {0.0, 0.1, 0.3, 0.6}) {
-    for (double ratio : {0.5, 1.5}) {
-      if (mu == 0 && ratio == 0.5) continue;
-      SCOPED_TRACE("mu " + std::to_string(mu) + " T/(mu N) " + std::to_string(ratio));
-      const double T = mu > 0 ? ratio * mu * N : 0.02;
-      auto solver = make_solver(crossing_pair(mu, n), Precision::double_precision, 1);
-      solver->set_external_force(n / 2, Vec3d(0, 0, -N));
-      while (solver->time() < 20e-6) solver->step();
-      ASSERT_NEAR(solver->crossing_normal_force(0), N, 1e-3 * N);
-      solver->set_external_force(n - 1, Vec3d(0, T, 0));
-      while (solver->time() < 30e-6) solver->step();
-      const double y0 = warp_centre_y(*solver, n), t0 = solver->time();
-      int samples = 0;
-      while (solver->time() < t0 + 60e-6) {
-        solver->step();
-        if (solver->steps() % 50) continue;
-        ++samples;
-        const double fn = solver->crossing_normal_force(0), ft = solver->crossing_friction_force(0);
-        EXPECT_NEAR(fn, N, 0.15 * N);  // the pull tilts the pressed warp a little
-        if (ratio < 1) {
-          EXPECT_FALSE(solver->crossing_sliding(0));
-          EXPECT_LE(ft, mu * fn * (1 + 1e-9));
-        } else {
-          EXPECT_TRUE(mu == 0 || solver->crossing_sliding(0));
-          EXPECT_NEAR(ft, mu * fn, 1e-9 * N);
-        }
-      }
-      EXPECT_GT(samples, 10);
-      const double moved = warp_centre_y(*solver, n) - y0;
-      const double free_motion = 0.5 * T / (n * kMass) * 60e-6 * 60e-6;  // T alone, 60 us
-      if (ratio < 1) {
-        // Stuck: only the pulled chain's elastic ringing moves its centre (tens of nm); free
-        // it would move tens of micrometres.
-        EXPECT_LT(std::abs(moved), 0.02 * free_motion);
-      } else {
-        // Sliding: it moves by at least (T - mu N) / T of the free motion (more, because
-        // the pressed node sags and the contact normal tilts forward as the contact moves
-        // back along the yarn: this test's flexible chain, not friction).
-        const double expect = (T - mu * N) / T * free_motion;
-        EXPECT_GT(moved, 0.8 * expect);
-      }
+  const double N = 0.1, t = 70e-6, M = n * kMass;
+  for (double mu : {0.1, 0.3, 0.6}) {
+    SCOPED_TRACE("mu " + std::to_string(mu));
+    {  // stuck
+      const double T = 0.5 * mu * N;
+      const Pull p = pull_pressed_warp(mu, T, N, n);
+      EXPECT_FALSE(p.ever_sliding);
+      // Only the pulled chain's elastic ringing moves its centre (tens of nm).
+      EXPECT_LT(std::abs(p.moved), 0.02 * 0.5 * T / M * t * t);
+    }
+    for (double ratio : {1.5, 3.0}) {  // sliding
+      SCOPED_TRACE("T / (mu N) " + std::to_string(ratio));
+      const double T = ratio * mu * N;
+      const Pull p = pull_pressed_warp(mu, T, N, n), free = pull_pressed_warp(0, T - mu * N, N, n);
+      EXPECT_TRUE(p.always_sliding);
+      const double friction_takes = 0.5 * mu * N / M * t * t;
+      EXPECT_NEAR(p.moved + p.fn_drift, free.moved, 0.02 * friction_takes)
+          << "moved " << p.moved << " m, frictionless at T - mu N " << free.moved << " m, |f_n - N| up to "
+          << p.max_fn_error << " N";
     }
   }
 }
