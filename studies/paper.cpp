@@ -59,6 +59,7 @@ struct LimitEntry {
   std::string dir;
   LimitResult result;
   bool have = false;
+  bool kept = false;  // its limit.json was there from an earlier call
   std::string error;
   bool keep_frame = false;
   double start_mps = NAN;  // where the search began (the velocity study's fit, or the fixed start)
@@ -135,8 +136,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   PaperResult result;
   prepare_output_dir(opt.out_dir);
   for (const char* sub : {"charts", "images", "limit", "velocity"}) prepare_output_dir(opt.out_dir + "/" + sub);
-  auto progress = [&](const std::string& stage, int done, int total) {
-    if (opt.on_progress) opt.on_progress(stage, done, total);
+  auto progress = [&](const std::string& stage, int done, int total, int kept) {
+    if (opt.on_progress) opt.on_progress(stage, done, total, kept);
   };
 
   const std::vector<std::string> base = opt.overrides;
@@ -171,7 +172,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   so.jobs = opt.jobs;
   std::map<double, Frame> image_frames;  // by velocity, mu = 0.2, failure 5.2 %
   SweepHooks hooks;
-  hooks.on_progress = [&](const SweepProgress& p) { progress("velocity sweep", p.done, p.total); };
+  hooks.on_progress = [&](const SweepProgress& p) { progress("velocity sweep", p.done, p.total, p.skipped); };
   hooks.on_simulation = [&](const Case& c, const Simulation& sim, const std::string&) {
     const Scene& s = sim.scene();
     if (!same(s.yarn.friction, kReferenceFriction) || !same(s.yarn.failure_strain, kDefaultFailure)) return;
@@ -243,7 +244,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
       SweepOptions co = so;
       co.out_dir = opt.out_dir + "/compression";
       SweepHooks ch;
-      ch.on_progress = [&](const SweepProgress& p) { progress("compression what-if", p.done, p.total); };
+      ch.on_progress = [&](const SweepProgress& p) { progress("compression what-if", p.done, p.total, p.skipped); };
       const std::vector<std::string> keys{"fabric.compression_force_n", "fabric.flattened_gap_mm", "yarn.friction",
                                           "projectile.velocity_mps"};
       const SweepReport crep = run_sweep(cc, cc, co, keys, ch, interrupt);
@@ -346,7 +347,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
   {
     std::mutex mu;
     std::condition_variable finished_cv;  // a search finished (its children may start)
-    int done = 0;
+    int done = 0, kept_searches = 0;
     std::vector<char> taken(limits.size(), 0), finished(limits.size(), 0);
     // The start of a search: its parent's limit, else its own fit, else the default (-1).
     auto seed_for = [&](size_t i) -> double {
@@ -374,6 +375,7 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
         prepare_output_dir(e.dir);
         if (fs::exists(e.dir + "/limit.json")) {
           e.result = limit_from_json(read_text_file(e.dir + "/limit.json"));
+          e.kept = true;
         } else {
           ShootFn shoot = scene_shooter(
               opt.scene_path, ov, interrupt,
@@ -429,7 +431,8 @@ PaperResult run_paper(const PaperOptions& opt, const std::atomic<bool>* interrup
         {
           std::lock_guard<std::mutex> lock(mu);
           finished[i] = 1;
-          progress("ballistic limits", ++done, int(limits.size()));
+          kept_searches += limits[i].kept;
+          progress("ballistic limits", ++done, int(limits.size()), kept_searches);
         }
         finished_cv.notify_all();
       }

@@ -46,8 +46,9 @@ struct PaperOptions {
   bool quick = false;
   // Draw `frame` to a PNG at `path`; returns false and says why when it cannot.
   std::function<bool(const Frame& frame, const std::string& path, std::string* error)> render_png;
-  // Progress: stage name, cases done, cases total.
-  std::function<void(const std::string& stage, int done, int total)> on_progress;
+  // Progress: stage name, cases done, cases total, and how many of the done ones were
+  // found finished by an earlier, interrupted call (kept, not run again).
+  std::function<void(const std::string& stage, int done, int total, int kept)> on_progress;
 };
 
 struct PaperResult {

@@ -589,9 +589,10 @@ std::string TimeLeft::left() const {
   return ran_ > 0 && ended_ < total_ ? left_text((now_s() - t0_s_) / ran_ * double(total_ - ended_)) : "";
 }
 
-std::string TimeLeft::at(int done, int total) const {
+std::string TimeLeft::at(int done, int total, int kept) const {
   std::string s = "[" + std::to_string(done) + "/" + std::to_string(total) + "]";
-  if (done > 0 && done < total) s += left_text((now_s() - t0_s_) / done * double(total - done));
+  const int ran = done - kept;  // kept ones took no time: the pace is of the ones run now
+  if (ran > 0 && done < total) s += left_text((now_s() - t0_s_) / ran * double(total - done));
   return s;
 }
 

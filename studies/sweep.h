@@ -91,8 +91,9 @@ class TimeLeft {
   void step(bool skipped);      // counts one finished run
   std::string counter() const;  // "[k/N]"
   std::string left() const;     // "  (about T s left)", or "" when none remain or none ran yet
-  // For a stage that reports only done of total: "[k/N]" and the time left at that pace.
-  std::string at(int done, int total) const;
+  // For a stage that reports only done of total: "[k/N]" and the time left at the pace of
+  // the done ones that were not kept from an earlier call.
+  std::string at(int done, int total, int kept = 0) const;
 
  private:
   int total_, ended_ = 0, ran_ = 0;

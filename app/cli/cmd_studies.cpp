@@ -299,13 +299,14 @@ int cmd_paper(const Args& args) {
     std::mutex mu;
     std::string last_stage;
     std::unique_ptr<studies::TimeLeft> pace;  // per stage: its pace so far
-    opt.on_progress = [&](const std::string& stage, int done, int total) {
+    opt.on_progress = [&](const std::string& stage, int done, int total, int kept) {
       if (!verbose) return;
       std::lock_guard<std::mutex> lock(mu);
       if (stage != last_stage && !last_stage.empty() && !isatty(fileno(stderr))) std::fprintf(stderr, "\n");
       if (stage != last_stage || !pace) pace = std::make_unique<studies::TimeLeft>(total);
       last_stage = stage;
-      const std::string at = pace->at(done, total);
+      std::string at = pace->at(done, total, kept);
+      if (kept > 0) at += " (" + std::to_string(kept) + " kept from an earlier run)";
       if (isatty(fileno(stderr)))
         std::fprintf(stderr, "\r  %s: %s      ", stage.c_str(), at.c_str());
       else if (done == total || done % 10 == 0)
@@ -320,7 +321,10 @@ int cmd_paper(const Args& args) {
       r = studies::run_paper(opt, &interrupt_flag());
     } catch (const std::exception& e) {
       if (interrupt_flag().load()) {
-        std::fprintf(stderr, "\nravel: interrupted; finished runs are kept, rerun to resume\n");
+        std::fprintf(stderr,
+                     "\nravel: interrupted; finished runs are kept in %s/ (velocity/, compression/, limit/); rerun "
+                     "the same command to resume\n",
+                     opt.out_dir.c_str());
         return exit_interrupted;
       }
       throw;

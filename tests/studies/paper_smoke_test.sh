@@ -4,7 +4,8 @@
 # statements of SPEC §9 each with ravel's number and a verdict from the stated thresholds,
 # the isolating numbers beside the friction work and the perforation times, the charts as
 # PNG + SVG + CSV, the ballistic-limit table with where each search started. The numbers
-# themselves describe a 24 mm ply and are not checked against the paper here.
+# themselves describe a 24 mm ply and are not checked against the paper here. The first call
+# is interrupted (Ctrl-C) after a few velocity runs; the second resumes from them.
 #
 # usage: paper_smoke_test.sh RAVEL OUT_DIR
 set -euo pipefail
@@ -15,8 +16,23 @@ fail() {
   echo "FAIL: $*"
   exit 1
 }
-"$ravel" paper --quick --set fabric.width_mm=24 --set fabric.length_mm=24 --jobs 2 --out "$out" --quiet >"$out.log" 2>&1 ||
-  { cat "$out.log"; fail "ravel paper exited $?"; }
+paper=("$ravel" paper --quick --set fabric.width_mm=24 --set fabric.length_mm=24 --jobs 2 --out "$out")
+# Ctrl-C during the velocity runs: exit 130, a message naming the folder, finished cases kept;
+# the same command then resumes from them (and says how many it kept).
+"${paper[@]}" >"$out.int.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 600); do [ "$(find "$out/velocity" -name summary.json 2>/dev/null | wc -l)" -ge 4 ] && break; sleep 0.05; done
+kill -INT "$pid"
+rc=0
+wait "$pid" || rc=$?
+[ "$rc" -eq 130 ] || { cat "$out.int.log"; fail "interrupted paper exited $rc, expected 130"; }
+grep -qF "ravel: interrupted; finished runs are kept in $out/" "$out.int.log" || { cat "$out.int.log"; fail "no interrupt message"; }
+kept=$(find "$out/velocity" -name summary.json | wc -l)
+[ "$kept" -ge 4 ] || fail "only $kept velocity runs finished before the interrupt"
+[ -e "$out/report.md" ] && fail "an interrupted paper wrote report.md"
+"${paper[@]}" >"$out.log" 2>&1 || { cat "$out.log"; fail "ravel paper exited $?"; }
+grep -qE "velocity sweep: \[[0-9]+/[0-9]+\].* \($kept kept from an earlier run\)" "$out.log" ||
+  { cat "$out.log"; fail "the rerun does not say it kept the $kept finished velocity runs"; }
 report=$out/report.md
 [ -s "$report" ] || fail "no report.md"
 claims=$(grep -cE '^\| [0-9, ]+ \| ' "$report")
