@@ -105,7 +105,9 @@ int cmd_tradeoff(const Args& args) {
     std::fflush(stdout);
     const auto r = studies::run_tradeoff(opt, &interrupt_flag());
     if (r.interrupted) {
-      std::fprintf(stderr, "ravel: interrupted; finished runs are kept, rerun to resume\n");
+      std::fprintf(stderr,
+                   "ravel: interrupted; finished runs are kept in %s/cases/ (rerun the same command to resume)\n",
+                   opt.out_dir.c_str());
       return exit_interrupted;
     }
     write_file_atomic(opt.out_dir + "/tradeoff.csv", studies::tradeoff_csv(r));

@@ -168,6 +168,25 @@ grep -q "stability: 12 cells in [0-9]* s ($((12 - kept)) run now, $kept kept fro
   bad "resumed stability did not reuse the $kept kept runs: $out"
 [ "$(($(wc -l <"$tmp/stab/stability.csv") - 1))" -eq 12 ] && ok || bad "resumed stability: stability.csv lacks cells"
 
+# --- ... and on ravel tradeoff.
+to=("$tmp/pt.toml" --quick --set fabric.width_mm=48 --set fabric.length_mm=48 --set solver.end_time_us=40 --jobs 1)
+"$ravel" tradeoff "${to[@]}" --out "$tmp/to" >"$tmp/to1.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 300); do [ "$(ls "$tmp"/to/cases/*/summary.json 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.05; done
+kill -INT $pid
+wait $pid
+rc=$?
+[ $rc -eq 130 ] && ok || bad "interrupted tradeoff: exit $rc: $(cat "$tmp/to1.log")"
+grep -qF "ravel: interrupted; finished runs are kept in $tmp/to/cases/" "$tmp/to1.log" && ok ||
+  bad "interrupted tradeoff: no message naming the folder: $(cat "$tmp/to1.log")"
+kept=$(ls "$tmp"/to/cases/*/summary.json 2>/dev/null | wc -l)
+[ "$kept" -ge 2 ] && ok || bad "interrupted tradeoff: only $kept runs finished"
+[ -e "$tmp/to/tradeoff.md" ] && bad "an interrupted tradeoff wrote tradeoff.md" || ok
+out=$("$ravel" tradeoff "${to[@]}" --out "$tmp/to" 2>&1)
+grep -qE "^tradeoff: [1-9][0-9]* runs \($kept already finished\)" <<<"$out" && ok ||
+  bad "resumed tradeoff did not reuse the $kept kept runs: $out"
+[ -s "$tmp/to/tradeoff.md" ] && ok || bad "resumed tradeoff: no tradeoff.md"
+
 # --- A sweep says k of N and each case's outcome; a diverged case is not "done".
 out=$("$ravel" sweep "${small[@]/--quiet/}" --set solver.end_time_us=20 --vary solver.dt_factor=0.5,2 --jobs 1 --out "$tmp/swd" 2>&1)
 grep -qE '^  \[1/2\] solver.dt_factor=0.5: ' <<<"$out" && ok || bad "sweep progress line: $out"
