@@ -100,5 +100,7 @@ Shot shot_from_json(const nlohmann::json& q);
 // limit.json: the result, the fit, every run, and what was run.
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
                        const std::vector<std::string>& overrides);
+// ... and read back (throws on text that is not JSON).
+LimitResult limit_from_json(const std::string& text);
 
 }  // namespace ravel::studies

@@ -68,30 +68,6 @@ struct LimitEntry {
   double frame_v = INFINITY;
 };
 
-LimitResult limit_from_json(const std::string& text) {
-  const auto j = nlohmann::json::parse(text);
-  LimitResult r;
-  r.bracketed = j.value("bracketed", false);
-  r.converged = j.value("converged", false);
-  if (j.contains("bracket_mps")) {
-    r.lo_mps = j["bracket_mps"][0].is_number() ? j["bracket_mps"][0].get<double>() : -1.0;
-    r.hi_mps = j["bracket_mps"][1].is_number() ? j["bracket_mps"][1].get<double>() : -1.0;
-  }
-  if (j["ballistic_limit_mps"].is_number()) r.ballistic_limit_mps = j["ballistic_limit_mps"].get<double>();
-  const auto& f = j["lambert_jonas"];
-  r.fit.ok = f.value("ok", false);
-  r.fit.a = f.value("a", 0.0);
-  r.fit.p = f.value("p", 0.0);
-  r.fit.vbl_mps = f.value("vbl_mps", 0.0);
-  r.fit.rms_mps = f.value("rms_mps", 0.0);
-  r.fit.points = f.value("points", 0);
-  r.fit.note = f.value("note", "");
-  for (const auto& q : j["runs"]) r.runs.push_back(shot_from_json(q));
-  for (const auto& w : j["warnings"]) r.warnings.push_back(w.get<std::string>());
-  r.wall_time_s = j.value("wall_time_s", 0.0);
-  return r;
-}
-
 struct Claim {
   std::string figure, paper, ravel, verdict;  // verdict: agrees | partly | differs | not measured
 };

@@ -10,6 +10,7 @@
 
 #include "model.h"
 #include "results.h"
+#include "run_record.h"
 
 namespace ravel::studies {
 
@@ -77,37 +78,30 @@ std::vector<StabilityMapSpec> default_stability_maps(bool quick) {
 
 StabilityCell classify_summary(const std::string& text) {
   StabilityCell c;
-  const auto j = ojson::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) {
+  const RunRecord r = parse_run_record(text);
+  if (!r.ok) {
     c.status = "failed";
-    c.diagnosis = "summary.json unreadable";
+    c.diagnosis = "summary.json " + r.error;
     return c;
   }
-  c.wall_time_s = j.contains("wall_time_s") && j["wall_time_s"].is_number() ? j["wall_time_s"].get<double>() : 0;
-  const double dt = j.contains("dt_s") && j["dt_s"].is_number() ? j["dt_s"].get<double>() : 0;
-  const double steps = j.contains("step_count") && j["step_count"].is_number() ? j["step_count"].get<double>() : 0;
-  c.end_time_us = dt * steps * 1e6;
-  const std::string status = j.value("status", "");
-  if (status == "diverged") {
+  c.wall_time_s = r.number("wall_time_s", 0);
+  c.end_time_us = r.number("dt_s", 0) * r.number("step_count", 0) * 1e6;
+  if (r.status == "diverged") {
     c.status = "diverged";
-    c.diagnosis = j.value("diagnosis", "");
-    c.cause = j.contains("divergence_cause") && j["divergence_cause"].is_string()
-                  ? j["divergence_cause"].get<std::string>()
-                  : "diverged";
+    c.diagnosis = r.diagnosis;
+    c.cause = r.divergence_cause.empty() ? "diverged" : r.divergence_cause;
     return c;
   }
-  if (status != "completed") {
+  if (r.status != "completed") {
     c.status = "failed";
-    c.diagnosis = "status " + status + ": " + j.value("diagnosis", "");
+    c.diagnosis = "status " + r.status + ": " + r.diagnosis;
     return c;
   }
   std::string search, pass;
-  if (j.contains("warnings"))
-    for (const auto& w : j["warnings"]) {
-      const std::string t = w.is_string() ? w.get<std::string>() : "";
-      if (t.find("slid more than one node") != std::string::npos) search = t;
-      if (t.find("passed through") != std::string::npos) pass = t;
-    }
+  for (const auto& t : r.warnings) {
+    if (t.find("slid more than one node") != std::string::npos) search = t;
+    if (t.find("passed through") != std::string::npos) pass = t;
+  }
   if (!search.empty() || !pass.empty()) {
     c.status = "warned";
     // "... slid more than one node in one step N times ..." / "N crossings found with yarns passed through ..."
@@ -123,7 +117,7 @@ StabilityCell classify_summary(const std::string& text) {
     return c;
   }
   c.status = "stable";
-  c.diagnosis = "completed (" + j.value("end_reason", std::string("?")) + ")";
+  c.diagnosis = "completed (" + (r.json.contains("end_reason") ? r.end_reason : std::string("?")) + ")";
   return c;
 }
 

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "results.h"
+#include "run_record.h"
 #include "version.h"
 
 namespace ravel::studies {
@@ -221,12 +222,9 @@ std::string results_csv(const std::string& out_dir, const std::vector<Case>& cas
   std::vector<std::pair<const Case*, nlohmann::ordered_json>> rows;
   for (const auto& c : cases) {
     if (!case_finished(out_dir, c)) continue;
-    nlohmann::ordered_json j;
-    try {
-      j = nlohmann::ordered_json::parse(read_text_file(case_dir(out_dir, c) + "/summary.json"));
-    } catch (const std::exception& e) {
-      throw OutputError(case_dir(out_dir, c) + "/summary.json: unreadable (" + e.what() + ")");
-    }
+    RunRecord r = read_run_record(case_dir(out_dir, c));
+    if (!r.ok) throw OutputError(case_dir(out_dir, c) + "/summary.json: " + r.error);
+    nlohmann::ordered_json j = std::move(r.json);
     for (auto it = j.begin(); it != j.end(); ++it) {
       const std::string k = it.value().is_array() ? it.key() + "_count" : it.key();
       if (std::find(summary_keys.begin(), summary_keys.end(), k) == summary_keys.end()) summary_keys.push_back(k);

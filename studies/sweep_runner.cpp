@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "results.h"
+#include "run_record.h"
 
 namespace ravel::studies {
 
@@ -65,16 +66,10 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
     };
     hooks.on_case = [this, &options, &keys](const CaseResult& r) {
       if (!r.ok) return;
-      std::string text = r.summary_json_text;
-      if (text.empty()) {
-        try {
-          text = read_text_file(case_dir(options.out_dir, r.c) + "/summary.json");
-        } catch (const std::exception&) {
-          return;
-        }
-      }
-      const auto j = nlohmann::ordered_json::parse(text, nullptr, false);
-      if (j.is_discarded()) return;
+      const RunRecord rec = r.summary_json_text.empty() ? read_run_record(case_dir(options.out_dir, r.c))
+                                                        : parse_run_record(r.summary_json_text);
+      if (!rec.ok) return;
+      const auto& j = rec.json;
       std::lock_guard<std::mutex> lock(mu_);
       Csv& csv = state_.results;
       if (csv.header.size() == 1 + keys.size())  // first case: the summary's scalar keys

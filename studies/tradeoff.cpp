@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "results.h"
+#include "run_record.h"
 #include "sweep.h"
 
 namespace ravel::studies {
@@ -213,39 +214,29 @@ class CpuMeter {
 };
 
 void fill_row_from_case(TradeoffRow& row, const std::string& dir) {
-  if (!fs::exists(dir + "/summary.json")) {
-    row.status = "missing";
+  const RunRecord r = read_run_record(dir);
+  if (!r.ok) {
+    row.status = r.error == "missing" ? "missing" : "failed";
+    if (r.error != "missing") row.note = "summary.json " + r.error;
     return;
   }
-  const auto j = ojson::parse(read_text_file(dir + "/summary.json"), nullptr, false);
-  if (j.is_discarded()) {
-    row.status = "failed";
-    row.note = "summary.json unreadable";
-    return;
-  }
-  auto d = [&](const char* k) { return j.contains(k) && j[k].is_number() ? j[k].get<double>() : NAN; };
-  row.wall_time_s = d("wall_time_s");
-  row.node_steps_per_s = d("node_steps_per_s");
-  row.perforated = j.contains("perforated") && j["perforated"].is_boolean() && j["perforated"].get<bool>();
-  row.value_q[q_residual_velocity] = d("residual_velocity_mps");
-  row.value_q[q_energy_absorbed] = d("energy_absorbed_J");
-  row.value_q[q_perforation_time] = j.contains("perforation_time_s") && j["perforation_time_s"].is_number()
-                                        ? j["perforation_time_s"].get<double>()
-                                        : -1.0;
-  const std::string status = j.value("status", "");
+  row.wall_time_s = r.wall_time_s;
+  row.node_steps_per_s = r.node_steps_per_s;
+  row.perforated = r.perforated;
+  row.value_q[q_residual_velocity] = r.residual_velocity_mps;
+  row.value_q[q_energy_absorbed] = r.energy_absorbed_J;
+  row.value_q[q_perforation_time] = r.perforation_time_s;
   std::string warn;
   bool method = false;
-  if (j.contains("warnings"))
-    for (const auto& w : j["warnings"]) {
-      const std::string t = w.get<std::string>();
-      if (method_warning(t)) method = true;
-      warn += (warn.empty() ? "" : "; ") + t;
-    }
-  if (status == "diverged") {
+  for (const auto& t : r.warnings) {
+    if (method_warning(t)) method = true;
+    warn += (warn.empty() ? "" : "; ") + t;
+  }
+  if (r.status == "diverged") {
     row.status = "diverged";
-    row.note = j.value("diagnosis", "");
+    row.note = r.diagnosis;
   } else {
-    row.status = method ? "warned" : status;
+    row.status = method ? "warned" : r.status;
     row.note = warn;
   }
   if (fs::exists(dir + "/cost.json")) {
@@ -360,8 +351,11 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
         const std::string path = opt.out_dir + "/limit/" + name + ".json";
         double v = NAN;
         if (fs::exists(path)) {
-          const auto j = ojson::parse(read_text_file(path), nullptr, false);
-          if (!j.is_discarded() && j.value("converged", false)) v = j["ballistic_limit_mps"].get<double>();
+          try {
+            const LimitResult kept = limit_from_json(read_text_file(path));
+            if (kept.converged) v = kept.ballistic_limit_mps;
+          } catch (const std::exception&) {  // unreadable: left without a limit, as before
+          }
         } else {
           auto ov = opt.overrides;
           for (const auto& o : cases[i].overrides()) ov.push_back(o);

@@ -22,6 +22,7 @@
 #include "limit.h"
 #include "paper.h"
 #include "results.h"
+#include "run_record.h"
 #include "sweep.h"
 #ifdef RAVEL_HAVE_RENDER
 #include "render/renderer.h"
@@ -121,15 +122,14 @@ int cmd_sweep(const Args& args) {
         return;
       }
       std::string outcome = "?";
-      const auto j = nlohmann::json::parse(r.summary_json_text, nullptr, false);
-      if (!j.is_discarded() && j.is_object()) {
-        const std::string status = j.value("status", "");
-        if (status == "diverged")
-          outcome = "DIVERGED: " + j.value("diagnosis", std::string());
-        else if (j.contains("perforated") && j["perforated"].is_boolean() && j["perforated"].get<bool>())
-          outcome = "perforated, residual " + fmt1(j["residual_velocity_mps"].get<double>()) + " m/s";
+      const studies::RunRecord rec = studies::parse_run_record(r.summary_json_text);
+      if (rec.ok) {
+        if (rec.status == "diverged")
+          outcome = "DIVERGED: " + rec.diagnosis;
+        else if (rec.perforated)
+          outcome = "perforated, residual " + fmt1(rec.residual_velocity_mps) + " m/s";
         else
-          outcome = j.value("end_reason", std::string("stopped"));
+          outcome = rec.end_reason.empty() ? "stopped" : rec.end_reason;
       }
       std::printf("  %s %s: %s%s\n", pace.counter().c_str(), r.c.name().c_str(), outcome.c_str(), pace.left().c_str());
       std::fflush(stdout);
