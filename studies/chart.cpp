@@ -178,6 +178,29 @@ void Painter::rect_outline(double x0, double y0, double x1, double y1, Rgb c, do
 
 namespace {
 
+// A legend entry's text broken at spaces into lines no wider than `width` (a word wider than
+// that stays whole on its own line): long names wrap instead of running off the image.
+std::vector<std::string> wrap_text(const Painter& p, const std::string& text, double size, double width) {
+  std::vector<std::string> lines;
+  std::string line;
+  size_t at = 0;
+  while (at < text.size()) {
+    size_t end = text.find(' ', at);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(at, end - at);
+    const std::string longer = line.empty() ? word : line + " " + word;
+    if (!line.empty() && p.text_width(longer, size) > width) {
+      lines.push_back(line);
+      line = word;
+    } else {
+      line = longer;
+    }
+    at = end + 1;
+  }
+  if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
+}
+
 // A categorical grid chart (Chart::grid): cells, row and column labels, a legend of the
 // categories. Same fonts and margins as the x-y charts.
 void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double W, double H, double fs) {
@@ -226,8 +249,11 @@ void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double 
     for (size_t k = 0; k < g.categories.size(); ++k) {
       const Rgb c = k < g.colors.size() ? g.colors[k] : Rgb{240, 240, 240};
       p.rect_filled(lx, ly - 0.5 * fs, lx + fs, ly + 0.5 * fs, c);
-      p.text(lx + 1.6 * fs, ly, g.categories[k], fs, ink, 0, false);
-      ly += 1.5 * fs;
+      for (const auto& line : wrap_text(p, g.categories[k], fs, legend_w - 1.6 * fs)) {
+        p.text(lx + 1.6 * fs, ly, line, fs, ink, 0, false);
+        ly += 1.2 * fs;
+      }
+      ly += 0.3 * fs;
     }
   }
 }
@@ -331,8 +357,11 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
       const Rgb c = palette(s.color >= 0 ? s.color : int(k));
       if (s.style != SeriesStyle::markers) p.line(lx, ly, lx + 2.0 * fs, ly, c, std::max(1.5, fs / 7), s.dashed);
       if (s.style != SeriesStyle::line) p.marker(lx + 1.0 * fs, ly, std::max(2.5, fs / 3.5), c);
-      p.text(lx + 2.5 * fs, ly, s.name, fs, ink, 0, false);
-      ly += 1.5 * fs;
+      for (const auto& line : wrap_text(p, s.name, fs, legend_w - 2.5 * fs)) {
+        p.text(lx + 2.5 * fs, ly, line, fs, ink, 0, false);
+        ly += 1.2 * fs;
+      }
+      ly += 0.3 * fs;
     }
   }
 }

@@ -67,7 +67,7 @@ struct VelocityRow {
 
 struct CompressionRow {
   std::string key;
-  double value = NAN, mu = NAN, energy_J = NAN;
+  double value = NAN, mu = NAN, energy_J = NAN, wall_s = NAN;
 };
 
 struct LimitEntry {
@@ -112,7 +112,8 @@ struct PaperState {
 
   // run_compression_stage
   std::vector<CompressionRow> compression_rows;
-  int compression_runs = 0;
+  int compression_runs = 0, compression_resumed = 0;
+  double compression_wall_s = 0;
 
   // run_limit_stage
   std::vector<LimitEntry> limits;

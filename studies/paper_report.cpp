@@ -213,15 +213,20 @@ void write_report(PaperState& ps) {
   md << "- Wall time " << num(result.wall_time_s, "%.0f") << " s for " << result.runs << " runs made now ("
      << num(result.runs_per_hour, "%.0f") << " runs per hour, " << opt.jobs << " jobs); velocity sweep "
      << num(ps.velocity_wall_s, "%.0f") << " s (" << vrep.cases_run << " run, " << vrep.cases_skipped << " resumed, "
-     << num(vrep.cases_per_hour, "%.0f") << " cases/h); ballistic limits " << num(ps.limit_wall_s, "%.0f") << " s ("
-     << ps.limit_runs << " runs); images " << num(ps.image_wall_s, "%.0f") << " s.\n";
+     << num(vrep.cases_per_hour, "%.0f") << " cases/h); compression what-if " << num(ps.compression_wall_s, "%.0f")
+     << " s (" << ps.compression_runs << " run, " << ps.compression_resumed << " resumed); ballistic limits "
+     << num(ps.limit_wall_s, "%.0f") << " s (" << ps.limit_runs << " runs); images " << num(ps.image_wall_s, "%.0f")
+     << " s (" << ps.image_runs << " runs).\n";
   {  // what every run cost, including runs made by earlier (resumed) invocations
     double run_s = 0;
     int n = 0;
     for (const auto& r : ps.rows)
       if (std::isfinite(r.wall_s)) run_s += r.wall_s, ++n;
+    for (const auto& r : ps.compression_rows)
+      if (std::isfinite(r.wall_s)) run_s += r.wall_s, ++n;
     for (const auto& e : ps.limits)
       for (const auto& s : e.result.runs) run_s += s.wall_time_s, ++n;
+    // (the image stage re-runs a resumed case only for its final frame: counted in the line above)
     md << "- All " << n << " runs behind this report (including resumed ones) took " << num(run_s, "%.0f")
        << " s of single-run wall time, " << num(n > 0 ? run_s / n : 0, "%.1f") << " s per run on average.\n";
   }

@@ -114,6 +114,8 @@ void run_compression_stage(PaperState& ps) {
     if (crep.interrupted) throw std::runtime_error("interrupted during the compression what-if (rerun to resume)");
     for (const auto& e : crep.errors) result.warnings.push_back("compression what-if: " + e);
     ps.compression_runs = crep.cases_run;
+    ps.compression_resumed = crep.cases_skipped;
+    ps.compression_wall_s = crep.wall_time_s;
     const Csv csv = parse_csv(read_text_file(co.out_dir + "/results.csv"));
     auto col = [&](const std::vector<std::string>& r, const char* name) {
       const int i = csv.column(name);
@@ -126,6 +128,7 @@ void run_compression_stage(PaperState& ps) {
       w.value = to_d(!f.empty() ? f : g);
       w.mu = to_d(col(r, "yarn.friction"));
       w.energy_J = to_d(col(r, "energy_absorbed_J"));
+      w.wall_s = to_d(col(r, "wall_time_s"));
       ps.compression_rows.push_back(w);
     }
   }

@@ -162,5 +162,48 @@ TEST(Chart, EmptyChartDrawsAxesOnly) {
   EXPECT_TRUE(well_formed_xml(chart_svg(c), &why)) << why;
 }
 
+// Records every text call with its extent, as the PNG and SVG painters would draw it.
+class TextExtents : public Painter {
+ public:
+  struct Box {
+    std::string s;
+    double x0, x1;
+  };
+  std::vector<Box> boxes;
+  void line(double, double, double, double, Rgb, double, bool) override {}
+  void rect_filled(double, double, double, double, Rgb) override {}
+  void marker(double, double, double, Rgb) override {}
+  void text(double x, double, const std::string& s, double size, Rgb, int align, bool vertical) override {
+    if (vertical) return;
+    const double w = text_width(s, size), x0 = align == 0 ? x : align == 1 ? x - w / 2 : x - w;
+    boxes.push_back({s, x0, x0 + w});
+  }
+};
+
+// A legend entry too long for the legend's share of the width (at most 35 %) wraps onto
+// more lines at spaces, and every line stays inside the chart (the paper's Fig. 16 label
+// "sliding model (bracket midpoint; bars: the bracket)" ran off its PNG).
+TEST(Chart, LongLegendEntriesWrapInsideTheChart) {
+  Chart c;
+  c.title = "t";
+  Series a{"sliding model (bracket midpoint; bars: the bracket) and then some more words", {0, 1}, {0, 1}};
+  Series b{"pin-jointed model", {0, 1}, {1, 0}};
+  c.series = {a, b};
+  for (double W : {600.0, 900.0, 1350.0}) {
+    TextExtents p;
+    draw_chart(c, p, 0, 0, W, 600);
+    std::string joined;
+    int pieces = 0;
+    for (const auto& box : p.boxes) {
+      EXPECT_LE(box.x1, W) << "'" << box.s << "' runs off a " << W << " px chart";
+      EXPECT_GE(box.x0, 0) << box.s;
+      if (a.name.find(box.s) != std::string::npos && box.s.size() > 3)
+        joined += (joined.empty() ? "" : " ") + box.s, ++pieces;
+    }
+    EXPECT_EQ(joined, a.name) << "at " << W << " px";  // all of it, in order, nothing lost
+    EXPECT_GE(pieces, 2) << "at " << W << " px the long entry did not wrap";
+  }
+}
+
 }  // namespace
 }  // namespace ravel::studies
