@@ -132,6 +132,11 @@ int cmd_run(const Args& args) {
   try {
     CommonArgs a = parse_args(args, "run");
     if (a.out_dir.empty()) throw UsageError("run needs --out DIR");
+    // Checked before anything that depends on the build, so every build says the same.
+    const bool resume = has_switch(a, "resume");
+    if (resume && (a.flags.count("frames") || has_switch(a, "vtk")))
+      throw UsageError(
+          "--resume cannot be combined with --frames or --vtk (the frames before the checkpoint are gone)");
 #ifdef RAVEL_HAVE_SNAPSHOT
     render::RecorderOptions rec;
     std::string rec_error;
@@ -159,10 +164,6 @@ int cmd_run(const Args& args) {
         throw UsageError("--checkpoint-every: expected seconds >= 0 (0 = never), got '" + a.flags["checkpoint-every"] +
                          "'");
     }
-    const bool resume = has_switch(a, "resume");
-    if (resume && (a.flags.count("frames") || has_switch(a, "vtk")))
-      throw UsageError(
-          "--resume cannot be combined with --frames or --vtk (the frames before the checkpoint are gone)");
     const std::string checkpoint_path = a.out_dir + "/checkpoint.bin";
     Scene scene = load_scene_from(a);
     // Said before a run that may take hours, not only in the summary at its end.

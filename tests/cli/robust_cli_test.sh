@@ -106,7 +106,7 @@ grep -qF "it looks like a value in kg" "$tmp/warn/summary.json" && ok || bad "wa
 # --- A killed run resumes from its checkpoint (--resume) and ends bit for bit as a run that
 # was never stopped: the same history.csv, byte for byte. kill -9: nothing is written at the
 # kill, only the periodic checkpoint (every 0.2 s here) is there.
-ck=(--set fabric.width_mm=60 --set fabric.length_mm=60 --set projectile.velocity_mps=100 --quiet)
+ck=(--set fabric.width_mm=40 --set fabric.length_mm=40 --set projectile.velocity_mps=100 --quiet)
 "$ravel" run "${ck[@]}" --out "$tmp/ck_ref" >/dev/null
 "$ravel" run "${ck[@]}" --checkpoint-every 0.2 --out "$tmp/ck" >/dev/null &
 pid=$!
