@@ -85,8 +85,8 @@ TEST(RenderRun, UnperforatedRunShowsNoHole) {
   // the default scene lumped two yarns to one (so it decides in about a second of CPU),
   // drawn at its end.
   Summary s;
-  const Frame f = run_default(
-      {"projectile.velocity_mps=40", "fabric.yarns_per_element=2", "solver.end_time_us=auto"}, 1e9, &s);
+  const Frame f =
+      run_default({"projectile.velocity_mps=40", "fabric.yarns_per_element=2", "solver.end_time_us=auto"}, 1e9, &s);
   ASSERT_FALSE(s.perforated);
   ASSERT_TRUE(s.end_reason == EndReason::rebounded || s.end_reason == EndReason::caught) << to_string(s.end_reason);
   EXPECT_LT(background_at_impact(f, "unperforated_40", 3.5e-3f), 0.02);
