@@ -58,25 +58,21 @@ void run_velocity_stage(PaperState& ps) {
 
   {
     const Csv csv = parse_csv(read_text_file(so.out_dir + "/results.csv"));
-    auto col = [&](const std::vector<std::string>& r, const char* name) {
-      const int i = csv.column(name);
-      return i >= 0 && i < int(r.size()) ? r[size_t(i)] : std::string();
-    };
     for (const auto& r : csv.rows) {
       VelocityRow w;
-      w.case_name = col(r, "case");
-      w.mu = to_d(col(r, "yarn.friction"));
-      w.failure = to_d(col(r, "yarn.failure_strain"));
-      w.v = to_d(col(r, "projectile.velocity_mps"));
-      w.perforated = col(r, "perforated") == "true";
-      w.energy_J = to_d(col(r, "energy_absorbed_J"));
-      w.residual = to_d(col(r, "residual_velocity_mps"));
-      w.perforation_time_s = to_d(col(r, "perforation_time_s"));
-      w.friction_work_J = to_d(col(r, "friction_work_J"));
-      w.wall_s = to_d(col(r, "wall_time_s"));
-      w.broken_warp_yarns = int(to_d(col(r, "broken_warp_yarns")));
-      w.broken_weft_yarns = int(to_d(col(r, "broken_weft_yarns")));
-      w.end_reason = col(r, "end_reason");
+      w.case_name = csv.cell(r, "case");
+      w.mu = to_d(csv.cell(r, "yarn.friction"));
+      w.failure = to_d(csv.cell(r, "yarn.failure_strain"));
+      w.v = to_d(csv.cell(r, "projectile.velocity_mps"));
+      w.perforated = csv.cell(r, "perforated") == "true";
+      w.energy_J = to_d(csv.cell(r, "energy_absorbed_J"));
+      w.residual = to_d(csv.cell(r, "residual_velocity_mps"));
+      w.perforation_time_s = to_d(csv.cell(r, "perforation_time_s"));
+      w.friction_work_J = to_d(csv.cell(r, "friction_work_J"));
+      w.wall_s = to_d(csv.cell(r, "wall_time_s"));
+      w.broken_warp_yarns = int(to_d(csv.cell(r, "broken_warp_yarns")));
+      w.broken_weft_yarns = int(to_d(csv.cell(r, "broken_weft_yarns")));
+      w.end_reason = csv.cell(r, "end_reason");
       if (w.end_reason != "perforated" && w.end_reason != "rebounded" && w.end_reason != "caught")
         result.warnings.push_back("velocity sweep case " + w.case_name + " ended by " + w.end_reason +
                                   ": its energy absorbed is not final");
@@ -117,18 +113,14 @@ void run_compression_stage(PaperState& ps) {
     ps.compression_resumed = crep.cases_skipped;
     ps.compression_wall_s = crep.wall_time_s;
     const Csv csv = parse_csv(read_text_file(co.out_dir + "/results.csv"));
-    auto col = [&](const std::vector<std::string>& r, const char* name) {
-      const int i = csv.column(name);
-      return i >= 0 && i < int(r.size()) ? r[size_t(i)] : std::string();
-    };
     for (const auto& r : csv.rows) {
       CompressionRow w;
-      const std::string f = col(r, "fabric.compression_force_n"), g = col(r, "fabric.flattened_gap_mm");
+      const std::string f = csv.cell(r, "fabric.compression_force_n"), g = csv.cell(r, "fabric.flattened_gap_mm");
       w.key = !f.empty() ? "fabric.compression_force_n" : "fabric.flattened_gap_mm";
       w.value = to_d(!f.empty() ? f : g);
-      w.mu = to_d(col(r, "yarn.friction"));
-      w.energy_J = to_d(col(r, "energy_absorbed_J"));
-      w.wall_s = to_d(col(r, "wall_time_s"));
+      w.mu = to_d(csv.cell(r, "yarn.friction"));
+      w.energy_J = to_d(csv.cell(r, "energy_absorbed_J"));
+      w.wall_s = to_d(csv.cell(r, "wall_time_s"));
       ps.compression_rows.push_back(w);
     }
   }

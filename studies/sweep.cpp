@@ -262,6 +262,11 @@ int Csv::column(const std::string& name) const {
   return -1;
 }
 
+std::string Csv::cell(const std::vector<std::string>& row, const std::string& name) const {
+  const int i = column(name);
+  return i >= 0 && i < int(row.size()) ? row[size_t(i)] : std::string();
+}
+
 Csv parse_csv(const std::string& text) {
   Csv csv;
   std::vector<std::string> row;

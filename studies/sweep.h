@@ -150,6 +150,8 @@ struct Csv {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
   int column(const std::string& name) const;  // -1 if absent
+  // A row's value in the named column; "" when the column is absent or the row is short.
+  std::string cell(const std::vector<std::string>& row, const std::string& name) const;
 };
 Csv parse_csv(const std::string& text);
 
