@@ -3,16 +3,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <filesystem>
 #include <map>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 
 #include "paper_internal.h"
 #include "results.h"
 #include "simulation.h"
+#include "work_queue.h"
 
 namespace ravel::studies::paper_detail {
 
@@ -207,9 +206,7 @@ void run_limit_stage(PaperState& ps) {
   if (pin < none) order.push_back(pin);
   {
     std::mutex mu;
-    std::condition_variable finished_cv;  // a search finished (its children may start)
     int done = 0, kept_searches = 0;
-    std::vector<char> taken(limits.size(), 0), finished(limits.size(), 0);
     // The start of a search: its parent's limit, else its own fit, else the default (-1).
     auto seed_for = [&](size_t i) -> double {
       const size_t p = parent[i];
@@ -219,7 +216,7 @@ void run_limit_stage(PaperState& ps) {
       }
       if (std::isfinite(limits[i].mu) && fitted_by_mu.count(limits[i].mu)) {
         limits[i].start_from = "fit";
-        return fitted_by_mu[limits[i].mu];
+        return fitted_by_mu.at(limits[i].mu);
       }
       limits[i].start_from = "default";
       return -1;
@@ -262,45 +259,23 @@ void run_limit_stage(PaperState& ps) {
         e.error = ex.what();
       }
     };
-    auto worker = [&] {
-      for (;;) {
-        size_t i = none;
-        double seed = -1;
-        {
-          std::unique_lock<std::mutex> lock(mu);
-          for (;;) {
-            if (interrupt && interrupt->load()) return;
-            bool left = false;
-            for (size_t j : order) {
-              if (taken[j]) continue;
-              left = true;
-              if (parent[j] == none || finished[parent[j]]) {
-                i = j;
-                break;
-              }
-            }
-            if (!left) return;
-            if (i < none) break;
-            // Every search left waits for a parent still running: wait for one to finish
-            // (waking now and then to see an interrupt).
-            finished_cv.wait_for(lock, std::chrono::milliseconds(200));
-          }
-          taken[i] = 1;
-          seed = seed_for(i);
-        }
-        run_entry(limits[i], seed);
-        {
-          std::lock_guard<std::mutex> lock(mu);
-          finished[i] = 1;
-          kept_searches += limits[i].kept;
-          ps.progress("ballistic limits", ++done, int(limits.size()), kept_searches);
-        }
-        finished_cv.notify_all();
+    // One queue item per search, taken in `order` once its parent has finished: the parent's
+    // limit (written by its item before the queue marks it finished) is read here unlocked.
+    auto search = [&](size_t i) {
+      double seed;
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        seed = seed_for(i);
       }
+      run_entry(limits[i], seed);
+      std::lock_guard<std::mutex> lock(mu);
+      kept_searches += limits[i].kept;
+      ps.progress("ballistic limits", ++done, int(limits.size()), kept_searches);
     };
-    std::vector<std::thread> pool;
-    for (int j = 0; j < std::max(1, std::min<int>(opt.jobs, int(limits.size()))); ++j) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
+    std::vector<size_t> after(parent);
+    for (auto& p : after)
+      if (p == none) p = kNoParent;
+    run_queue(limits.size(), opt.jobs, interrupt, search, order, after);
   }
   if (interrupt && interrupt->load())
     throw std::runtime_error("interrupted during the ballistic-limit searches (rerun to resume)");

@@ -13,11 +13,11 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 
 #include "results.h"
 #include "run_record.h"
 #include "version.h"
+#include "work_queue.h"
 
 namespace ravel::studies {
 
@@ -442,7 +442,6 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
   SweepProgress prog;
   prog.total = int(to_run.size());
   std::mutex mu;
-  std::atomic<size_t> next{0};
   std::atomic<long> tmp_counter{0};
   const std::string host = host_name();
 
@@ -460,80 +459,74 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
     if (hooks.on_progress) hooks.on_progress(prog);
   };
 
-  auto worker = [&] {
-    for (;;) {
-      if (interrupt && interrupt->load()) return;
-      const size_t i = next.fetch_add(1);
-      if (i >= to_run.size()) return;
-      const Case& c = to_run[i];
-      CaseResult r;
-      r.c = c;
-      const std::string final_dir = case_dir(opt.out_dir, c);
-      if (case_finished(opt.out_dir, c)) {
-        r.skipped = true;
-        report_case(r);
-        continue;
-      }
-      const std::string tmp = opt.out_dir + "/.tmp-" + c.name().substr(0, 120) + "-" + host + "-" +
-                              std::to_string(::getpid()) + "-" + std::to_string(tmp_counter.fetch_add(1));
-      std::error_code ec;
-      try {
-        auto ov = opt.overrides;
-        for (const auto& o : c.overrides()) ov.push_back(o);
-        ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
-        ov.push_back("output.progress=false");
-        Scene scene = load_scene(opt.scene_path, ov);
-        fs::remove_all(tmp, ec);
-        fs::create_directories(tmp, ec);
-        if (ec) throw OutputError(tmp + ": cannot create (" + ec.message() + ")");
-        Simulation sim(scene);
-        sim.run(interrupt);
-        if (opt.extend_undecided && sim.extend_to(scene.solver.max_end_time_s)) sim.run(interrupt);
-        if (sim.summary().status == RunStatus::interrupted) {
-          fs::remove_all(tmp, ec);
-          return;  // not finished: a rerun resumes it
-        }
-        if (sim.summary().status == RunStatus::diverged) {
-          std::lock_guard<std::mutex> lock(mu);
-          ++rep.cases_diverged;
-        }
-        nlohmann::ordered_json cj;
-        cj["index"] = c.index;
-        cj["name"] = c.name();
-        cj["settings"] = nlohmann::ordered_json::object();
-        for (const auto& [k, v] : c.settings) cj["settings"][k] = v;
-        cj["base_scene"] = opt.scene_path;
-        cj["base_overrides"] = opt.overrides;
-        cj["base_scene_toml"] = base_toml;  // the resolved scene a resume must match
-        cj["ravel"] = build;
-        write_file_atomic(tmp + "/case.json", cj.dump(2) + "\n");
-        if (hooks.on_simulation) {
-          std::lock_guard<std::mutex> lock(mu);
-          hooks.on_simulation(c, sim, tmp);
-        }
-        write_run_outputs(tmp, sim);  // summary.json last
-        r.summary_json_text = summary_json(sim.summary(), sim.scene());
-        // Publish the whole folder at once. Another shard may have finished it meanwhile.
-        if (case_finished(opt.out_dir, c)) {
-          fs::remove_all(tmp, ec);
-        } else {
-          fs::remove_all(final_dir, ec);  // an incomplete folder not made by ravel
-          fs::rename(tmp, final_dir, ec);
-          if (ec) throw OutputError(final_dir + ": cannot move the finished case into place (" + ec.message() + ")");
-        }
-      } catch (const std::exception& e) {
-        fs::remove_all(tmp, ec);
-        r.ok = false;
-        r.error = e.what();
-      }
+  // One item per case; an interrupted case returns without a result (a rerun resumes it).
+  auto run_case = [&](size_t i) {
+    const Case& c = to_run[i];
+    CaseResult r;
+    r.c = c;
+    const std::string final_dir = case_dir(opt.out_dir, c);
+    if (case_finished(opt.out_dir, c)) {
+      r.skipped = true;
       report_case(r);
+      return;
     }
+    const std::string tmp = opt.out_dir + "/.tmp-" + c.name().substr(0, 120) + "-" + host + "-" +
+                            std::to_string(::getpid()) + "-" + std::to_string(tmp_counter.fetch_add(1));
+    std::error_code ec;
+    try {
+      auto ov = opt.overrides;
+      for (const auto& o : c.overrides()) ov.push_back(o);
+      ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
+      ov.push_back("output.progress=false");
+      Scene scene = load_scene(opt.scene_path, ov);
+      fs::remove_all(tmp, ec);
+      fs::create_directories(tmp, ec);
+      if (ec) throw OutputError(tmp + ": cannot create (" + ec.message() + ")");
+      Simulation sim(scene);
+      sim.run(interrupt);
+      if (opt.extend_undecided && sim.extend_to(scene.solver.max_end_time_s)) sim.run(interrupt);
+      if (sim.summary().status == RunStatus::interrupted) {
+        fs::remove_all(tmp, ec);
+        return;  // not finished: a rerun resumes it
+      }
+      if (sim.summary().status == RunStatus::diverged) {
+        std::lock_guard<std::mutex> lock(mu);
+        ++rep.cases_diverged;
+      }
+      nlohmann::ordered_json cj;
+      cj["index"] = c.index;
+      cj["name"] = c.name();
+      cj["settings"] = nlohmann::ordered_json::object();
+      for (const auto& [k, v] : c.settings) cj["settings"][k] = v;
+      cj["base_scene"] = opt.scene_path;
+      cj["base_overrides"] = opt.overrides;
+      cj["base_scene_toml"] = base_toml;  // the resolved scene a resume must match
+      cj["ravel"] = build;
+      write_file_atomic(tmp + "/case.json", cj.dump(2) + "\n");
+      if (hooks.on_simulation) {
+        std::lock_guard<std::mutex> lock(mu);
+        hooks.on_simulation(c, sim, tmp);
+      }
+      write_run_outputs(tmp, sim);  // summary.json last
+      r.summary_json_text = summary_json(sim.summary(), sim.scene());
+      // Publish the whole folder at once. Another shard may have finished it meanwhile.
+      if (case_finished(opt.out_dir, c)) {
+        fs::remove_all(tmp, ec);
+      } else {
+        fs::remove_all(final_dir, ec);  // an incomplete folder not made by ravel
+        fs::rename(tmp, final_dir, ec);
+        if (ec) throw OutputError(final_dir + ": cannot move the finished case into place (" + ec.message() + ")");
+      }
+    } catch (const std::exception& e) {
+      fs::remove_all(tmp, ec);
+      r.ok = false;
+      r.error = e.what();
+    }
+    report_case(r);
   };
 
   const int jobs = std::max(1, std::min<int>(opt.jobs, std::max<int>(1, int(to_run.size()))));
-  std::vector<std::thread> pool;
-  for (int j = 0; j < jobs; ++j) pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
+  run_queue(to_run.size(), jobs, interrupt, run_case);
 
   rep.interrupted = interrupt && interrupt->load();
   rep.wall_time_s = elapsed();

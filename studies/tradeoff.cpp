@@ -12,11 +12,11 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <thread>
 
 #include "results.h"
 #include "run_record.h"
 #include "sweep.h"
+#include "work_queue.h"
 
 namespace ravel::studies {
 
@@ -339,51 +339,43 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
   // Ballistic limits (one search per distinct case; resumed from DIR/limit/<case>.json).
   if (opt.limit && !res.interrupted) {
     prepare_output_dir(opt.out_dir + "/limit");
-    std::atomic<size_t> next{0};
     std::mutex mu;
     std::map<std::string, double> bl;
-    auto worker = [&] {
-      for (;;) {
-        if (interrupt && interrupt->load()) return;
-        const size_t i = next.fetch_add(1);
-        if (i >= cases.size()) return;
-        const std::string name = cases[i].name();
-        const std::string path = opt.out_dir + "/limit/" + name + ".json";
-        double v = NAN;
-        if (fs::exists(path)) {
-          try {
-            const LimitResult kept = limit_from_json(read_text_file(path));
-            if (kept.converged) v = kept.ballistic_limit_mps;
-          } catch (const std::exception&) {  // unreadable: left without a limit, as before
-          }
-        } else {
-          auto ov = opt.overrides;
-          for (const auto& o : cases[i].overrides()) ov.push_back(o);
-          ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
-          ov.push_back("output.progress=false");
-          try {
-            auto r =
-                find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, {}, opt.out_dir + "/limit/" + name),
-                                     opt.limit_options, false);
-            if (interrupt && interrupt->load()) return;
-            write_file_atomic(path, limit_json(r, opt.limit_options, opt.scene_path, ov));
-            if (r.converged) v = r.ballistic_limit_mps;
-          } catch (const std::exception& e) {
-            std::lock_guard<std::mutex> lock(mu);
-            res.warnings.push_back("ballistic limit of " + name + ": " + e.what());
-          }
-          if (opt.on_progress) {
-            std::lock_guard<std::mutex> lock(mu);
-            opt.on_progress("ballistic limit " + name + ": " + (std::isnan(v) ? "not found" : num(v) + " m/s"));
-          }
+    auto search = [&](size_t i) {
+      const std::string name = cases[i].name();
+      const std::string path = opt.out_dir + "/limit/" + name + ".json";
+      double v = NAN;
+      if (fs::exists(path)) {
+        try {
+          const LimitResult kept = limit_from_json(read_text_file(path));
+          if (kept.converged) v = kept.ballistic_limit_mps;
+        } catch (const std::exception&) {  // unreadable: left without a limit, as before
         }
-        std::lock_guard<std::mutex> lock(mu);
-        bl[name] = v;
+      } else {
+        auto ov = opt.overrides;
+        for (const auto& o : cases[i].overrides()) ov.push_back(o);
+        ov.push_back("solver.threads=" + std::to_string(opt.solver_threads));
+        ov.push_back("output.progress=false");
+        try {
+          auto r =
+              find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, {}, opt.out_dir + "/limit/" + name),
+                                   opt.limit_options, false);
+          if (interrupt && interrupt->load()) return;
+          write_file_atomic(path, limit_json(r, opt.limit_options, opt.scene_path, ov));
+          if (r.converged) v = r.ballistic_limit_mps;
+        } catch (const std::exception& e) {
+          std::lock_guard<std::mutex> lock(mu);
+          res.warnings.push_back("ballistic limit of " + name + ": " + e.what());
+        }
+        if (opt.on_progress) {
+          std::lock_guard<std::mutex> lock(mu);
+          opt.on_progress("ballistic limit " + name + ": " + (std::isnan(v) ? "not found" : num(v) + " m/s"));
+        }
       }
+      std::lock_guard<std::mutex> lock(mu);
+      bl[name] = v;
     };
-    std::vector<std::thread> pool;
-    for (int j = 0; j < std::max(1, std::min<int>(opt.jobs, int(cases.size()))); ++j) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
+    run_queue(cases.size(), opt.jobs, interrupt, search);
     for (auto& row : res.rows)
       if (bl.count(row.case_name)) row.value_q[q_ballistic_limit] = bl[row.case_name];
     if (interrupt && interrupt->load()) res.interrupted = true;
