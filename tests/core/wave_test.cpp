@@ -122,5 +122,50 @@ TEST(SingleYarn, StrainBehindTheFrontConvergesToSmith) {
   }
 }
 
+// Why a rigid clamp is a place where yarns break (docs/MODEL.md §10): a stretch wave that
+// meets a fixed end comes back with the material stopped and the strain doubled. Method of
+// images: while only longitudinal waves have reached it, the region by the clamp moves
+// linearly (the chain is linear in its Lagrangian strain), so the clamped yarn's strain at
+// y is the strain an endless yarn has at y plus the strain it has at the mirror point
+// 2 y_c - y, both at the same time. A yarn twice as long (whose own ends the waves have not
+// reached) stands for the endless one. The relation holds to rounding (4e-10 of the strain
+// here, after 455 double-precision steps; bound 1e-8), and the strain at the clamp is
+// then twice the incident one (2.09: the incident strain still rises along the 5 mm averaged).
+TEST(SingleYarn, ReflectionAtAClampDoublesTheStrain) {
+  auto clamped = single_yarn(100), endless = single_yarn(100);
+  clamped.push_back("solver.end_time_us=40");
+  endless.push_back("solver.end_time_us=40");
+  endless.push_back("fabric.length_mm=600");
+  Simulation a(test::scene_with(clamped)), b(test::scene_with(endless));
+  const double c = std::sqrt(kE / kRho);
+  const double yc = std::floor(0.150 / kL0) * kL0;  // the clamped end node
+  const double t = yc / c + 6e-6;                   // the reflection is c x 6 us = 43 mm back
+  test::run_until(a, t);
+  test::run_until(b, t);
+  ASSERT_EQ(a.step_count(), b.step_count());
+  const Profile pa = profile(a), pb = profile(b);
+  auto strain_at = [&](const Profile& p, double y) {  // the element whose midpoint is y
+    for (size_t e = 0; e < p.y.size(); ++e)
+      if (std::abs(p.y[e] - y) < 0.3 * kL0) return p.strain[e];
+    ADD_FAILURE() << "no element at y = " << y;
+    return 0.0;
+  };
+  double worst = 0, incident = 0, at_clamp = 0;
+  int n = 0;
+  for (size_t e = 0; e < pa.y.size(); ++e) {
+    const double y = pa.y[e];
+    if (y < yc - 40e-3 || y > yc) continue;
+    const double direct = strain_at(pb, y), image = strain_at(pb, 2 * yc - y);
+    worst = std::max(worst, std::abs(pa.strain[e] - (direct + image)));
+    if (y > yc - 5e-3) incident += direct, at_clamp += pa.strain[e], ++n;
+  }
+  ASSERT_GT(n, 4);
+  incident /= n;
+  at_clamp /= n;
+  EXPECT_GT(incident, 0.5 * smith_strain(100, c));
+  EXPECT_LT(worst, 1e-8 * incident) << "clamped = endless + image, worst difference " << worst;
+  EXPECT_NEAR(at_clamp / incident, 2.0, 0.1) << "incident " << incident << ", at the clamp " << at_clamp;
+}
+
 }  // namespace
 }  // namespace ravel
