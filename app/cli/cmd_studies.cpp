@@ -309,7 +309,7 @@ int cmd_paper(const Args& args) {
       if (kept > 0) at += " (" + std::to_string(kept) + " kept from an earlier run)";
       if (isatty(fileno(stderr)))
         std::fprintf(stderr, "\r  %s: %s      ", stage.c_str(), at.c_str());
-      else if (done == total || done % 10 == 0)
+      else if (done == total || done % 10 == 0 || total <= 20)  // a log: each of a few long items
         std::fprintf(stderr, "  %s: %s\n", stage.c_str(), at.c_str());
     };
     install_signal_handlers();
