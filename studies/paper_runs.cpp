@@ -184,7 +184,7 @@ void run_limit_stage(PaperState& ps) {
     if (f.ok && f.vbl_mps > lo.min_mps) fitted_by_mu[mu] = f.vbl_mps;
   }
   std::vector<size_t> below, above, order;  // below: descending; above: ascending
-  size_t ref = limits.size(), pin = limits.size();
+  size_t ref = kNoParent, pin = kNoParent;  // kNoParent: not in the plan
   for (size_t i = 0; i < limits.size(); ++i) {
     if (!std::isfinite(limits[i].mu))
       pin = i;
@@ -195,22 +195,21 @@ void run_limit_stage(PaperState& ps) {
   }
   std::sort(below.begin(), below.end(), [&](size_t a, size_t b) { return limits[a].mu > limits[b].mu; });
   std::sort(above.begin(), above.end(), [&](size_t a, size_t b) { return limits[a].mu < limits[b].mu; });
-  const size_t none = limits.size();
-  std::vector<size_t> parent(limits.size(), none);  // none: a root
+  std::vector<size_t> parent(limits.size(), kNoParent);  // kNoParent: a root
   for (size_t k = 0; k < below.size(); ++k) parent[below[k]] = k == 0 ? ref : below[k % 2 ? k - 1 : k - 2];
   for (size_t k = 1; k < above.size(); ++k) parent[above[k]] = above[k - 1];
-  if (pin < none) parent[pin] = !above.empty() ? above.back() : ref;
-  if (ref < none) order.push_back(ref);
+  if (pin != kNoParent) parent[pin] = !above.empty() ? above.back() : ref;
+  if (ref != kNoParent) order.push_back(ref);
   for (size_t i : below) order.push_back(i);
   for (size_t i : above) order.push_back(i);
-  if (pin < none) order.push_back(pin);
+  if (pin != kNoParent) order.push_back(pin);
   {
     std::mutex mu;
     int done = 0, kept_searches = 0;
     // The start of a search: its parent's limit, else its own fit, else the default (-1).
     auto seed_for = [&](size_t i) -> double {
       const size_t p = parent[i];
-      if (p < none && limits[p].have && limits[p].result.bracketed) {
+      if (p != kNoParent && limits[p].have && limits[p].result.bracketed) {
         limits[i].start_from = "limit of " + limits[p].label;
         return limits[p].result.ballistic_limit_mps;
       }
@@ -272,10 +271,7 @@ void run_limit_stage(PaperState& ps) {
       kept_searches += limits[i].kept;
       ps.progress("ballistic limits", ++done, int(limits.size()), kept_searches);
     };
-    std::vector<size_t> after(parent);
-    for (auto& p : after)
-      if (p == none) p = kNoParent;
-    run_queue(limits.size(), opt.jobs, interrupt, search, order, after);
+    run_queue(limits.size(), opt.jobs, interrupt, search, order, parent);
   }
   if (interrupt && interrupt->load())
     throw std::runtime_error("interrupted during the ballistic-limit searches (rerun to resume)");
