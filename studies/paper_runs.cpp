@@ -160,9 +160,14 @@ void run_limit_stage(PaperState& ps) {
   //   - the reference friction (0.2) and the lowest friction above it (0.4) are roots,
   //     started at the Lambert-Jonas limit fitted to their own velocity runs (180-500 m/s;
   //     within ~10 % for mu >= 0.1: 86 against a bisected 78 m/s at mu = 0.2);
-  //   - below the reference, in descending order b0, b1, ...: b0 from the reference, each
-  //     odd b(k) from b(k-1) and each even one from b(k-2) (0.1 <- 0.2, 0.06 <- 0.1,
-  //     0.02 <- 0.1, 0 <- 0.02), so that two branches can run at once;
+  //   - below the reference, in descending order b0, b1, ...: two chains from the
+  //     reference, b0 <- ref, b1 <- b0 and b2 <- ref, b3 <- b2, b4 <- b3, ... (0.1 <- 0.2,
+  //     0.06 <- 0.1; 0.02 <- 0.2, 0 <- 0.02), so that both workers search below the
+  //     reference at once. Searches here are the longest (runs near the limit creep on for
+  //     milliseconds), and the chain 0.2 -> 0.1 -> 0.02 -> 0 of an earlier tree was the
+  //     critical path of the whole study (61 of its 76 minutes with --jobs 2). Starting
+  //     0.02 from 0.2's limit rather than 0.1's costs about one more run, above the limit,
+  //     where runs are short;
   //   - above it each from the next lower (0.6 <- 0.4, ...), the pin-jointed model from the
   //     highest friction.
   // A seeded search takes steps of 15 % that grow (growth_accel) until the outcome flips. A
@@ -196,7 +201,7 @@ void run_limit_stage(PaperState& ps) {
   std::sort(below.begin(), below.end(), [&](size_t a, size_t b) { return limits[a].mu > limits[b].mu; });
   std::sort(above.begin(), above.end(), [&](size_t a, size_t b) { return limits[a].mu < limits[b].mu; });
   std::vector<size_t> parent(limits.size(), kNoParent);  // kNoParent: a root
-  for (size_t k = 0; k < below.size(); ++k) parent[below[k]] = k == 0 ? ref : below[k % 2 ? k - 1 : k - 2];
+  for (size_t k = 0; k < below.size(); ++k) parent[below[k]] = k == 0 || k == 2 ? ref : below[k - 1];
   for (size_t k = 1; k < above.size(); ++k) parent[above[k]] = above[k - 1];
   if (pin != kNoParent) parent[pin] = !above.empty() ? above.back() : ref;
   if (ref != kNoParent) order.push_back(ref);
