@@ -147,5 +147,7 @@ void write_images(PaperState& ps);
 void make_charts(PaperState& ps);
 void make_claims(PaperState& ps);
 void write_report(PaperState& ps);
+// DIR/claims.json (written by write_report): the verdicts and limits, for scripts.
+std::string claims_json(const PaperState& ps);
 
 }  // namespace ravel::studies::paper_detail

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "paper_internal.h"
 #include "results.h"
 
@@ -276,9 +278,9 @@ void write_report(PaperState& ps) {
   }
   md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). The searches "
         "start from a fixed tree, so the numbers do not depend on --jobs: mu = 0.2 and 0.4 at the Lambert-Jonas limit "
-        "fitted to their velocity-study runs; below 0.2, 0.1 from 0.2, 0.06 and 0.02 from 0.1, 0 from 0.02; above, "
-        "each "
-        "from the next lower friction, the pin-jointed model from the highest (with no parent limit, at its own fit, "
+        "fitted to their velocity-study runs; below 0.2, two chains from 0.2's limit (0.1, then 0.06 from 0.1; 0.02, "
+        "then 0 from 0.02); above, each from the next lower friction, the pin-jointed model from the highest (with no "
+        "parent limit, at its own fit, "
         "else 75 m/s). Each search steps by 15 % from its start (25 % from 75 m/s), the steps growing (23, 37, 60 %) "
         "until the outcome flips, then bisects.\n\n";
 
@@ -288,7 +290,8 @@ void write_report(PaperState& ps) {
 
   md << "## Data\n\n- `velocity/results.csv`: one row per velocity run (every summary.json key); each run's folder "
         "holds history.csv, summary.json, scene.toml.\n- `limit/*/limit.json`: every run of each ballistic-limit "
-        "search.\n\n";
+        "search.\n- `claims.json`: the statements' verdicts and the ballistic limits above, for scripts "
+        "(scripts/nightly).\n\n";
   if (!result.warnings.empty()) {
     md << "## Warnings\n\n";
     for (const auto& w : result.warnings) md << "- " << w << "\n";
@@ -296,6 +299,42 @@ void write_report(PaperState& ps) {
   }
   result.report_path = opt.out_dir + "/report.md";
   write_file_atomic(result.report_path, md.str());
+  write_file_atomic(opt.out_dir + "/claims.json", claims_json(ps));
+}
+
+// DIR/claims.json: the report's verdicts and ballistic limits for scripts (scripts/nightly):
+// each claim as in the table, and each search's limit with its bracket and its health.
+std::string claims_json(const PaperState& ps) {
+  using nlohmann::json;
+  const PaperResult& r = ps.result;
+  json j;
+  j["mode"] = ps.plan.quick ? "quick" : "full";
+  j["counts"] = {{"agrees", r.claims_agree},
+                 {"partly", r.claims_partly},
+                 {"differs", r.claims_differ},
+                 {"not_measured", r.claims_unknown}};
+  j["claims"] = json::array();
+  for (const auto& c : ps.claims)
+    j["claims"].push_back({{"figure", c.figure}, {"paper", c.paper}, {"ravel", c.ravel}, {"verdict", c.verdict}});
+  j["limits"] = json::array();
+  for (const auto& e : ps.limits) {
+    json l = {{"label", e.label}, {"found", e.have && e.result.bracketed}};
+    l["mu"] = std::isfinite(e.mu) ? json(e.mu) : json(nullptr);  // null: pin-jointed
+    int undecided = 0;
+    for (const auto& s : e.result.runs) undecided += !s.decided;
+    l["runs"] = e.result.runs.size();
+    l["undecided_runs"] = undecided;
+    if (e.have && e.result.bracketed) {
+      l["ballistic_limit_mps"] = e.result.ballistic_limit_mps;
+      l["lo_mps"] = e.result.lo_mps;
+      l["hi_mps"] = e.result.hi_mps;
+      l["converged"] = e.result.converged;
+    }
+    if (!e.error.empty()) l["error"] = e.error;
+    j["limits"].push_back(l);
+  }
+  j["warnings"] = r.warnings;
+  return j.dump(2) + "\n";
 }
 
 }  // namespace ravel::studies::paper_detail

@@ -48,6 +48,26 @@ for stem in fig13_energy_vs_velocity_friction fig14_velocity_history fig16_balli
   done
 done
 head -c 8 "$out/charts/fig16_ballistic_limit_vs_friction.png" | od -An -tx1 | grep -q '89 50 4e 47' || fail "fig16 is not a PNG"
+# claims.json: the same verdicts as the table (counted against it) and each found limit inside
+# its bracket, for scripts (scripts/nightly reads it).
+python3 - "$out/claims.json" "$report" <<'PY' || fail "claims.json does not match report.md"
+import json, re, sys
+j = json.load(open(sys.argv[1]))
+rows = [l for l in open(sys.argv[2]) if re.match(r"^\| [0-9, ]+ \| ", l)]
+verdicts = [re.search(r"\*\*(agrees|partly|differs|not measured)\*\* \|$", l.rstrip()).group(1) for l in rows]
+assert [c["verdict"] for c in j["claims"]] == verdicts, (j["claims"], verdicts)
+n = {k: verdicts.count(v) for k, v in [("agrees", "agrees"), ("partly", "partly"), ("differs", "differs"), ("not_measured", "not measured")]}
+assert j["counts"] == n, (j["counts"], n)
+assert j["mode"] == "quick"
+assert len(j["limits"]) == 7, len(j["limits"])
+found = 0
+for l in j["limits"]:
+    if l["found"]:
+        found += 1
+        assert l["lo_mps"] < l["ballistic_limit_mps"] < l["hi_mps"], l
+        assert l["runs"] >= 2, l
+assert found >= 5, j["limits"]
+PY
 # Images need the offscreen renderer (absent in the sanitizer builds, where the report says so).
 if ! grep -q 'this build has no offscreen renderer' "$report"; then
   ls "$out"/images/*.png >/dev/null 2>&1 || fail "no perforation images"
