@@ -60,7 +60,6 @@ Model build_model(const Scene& scene) {
   const bool single = f.weave == Weave::single_yarn;
   const bool sliding = !single && scene.solver.model == ContactModel::sliding;
   m.contact = single ? ContactModel::pin_jointed : scene.solver.model;
-  m.lumping = k;
   m.half_width = f.width_m / 2;
   m.half_length = f.length_m / 2;
   m.thickness = f.thickness_m;
@@ -223,7 +222,6 @@ Model build_model(const Scene& scene) {
       m.elem_yarn.push_back(yy);
       m.elem_rest.push_back(rest_len);
       m.elem_area.push_back(a);
-      m.elem_stiffness.push_back(m.modulus_inst * a / crimped);
     }
     const int e0 = m.yarn_elem_offset.back();
     for (int kk = 0; kk + 2 < n; ++kk) {

@@ -48,7 +48,6 @@ struct Model {
   ContactModel contact = ContactModel::sliding;
   bool mirror_x = false, mirror_y = false;  // modelled part is x >= 0 / y >= 0
   double symmetry_factor = 1.0;             // whole-fabric quantity = modelled x factor
-  int lumping = 1;                          // yarns per modelled yarn
 
   // --- nodes
   int node_count = 0;
@@ -76,7 +75,6 @@ struct Model {
   std::vector<int> elem_a, elem_b, elem_yarn;
   std::vector<double> elem_rest;  // initial length, m: the crimped zig-zag's (sliding), the node spacing (pin-jointed)
   std::vector<double> elem_area;  // m^2 (half for a yarn on a symmetry plane, x k when lumped)
-  std::vector<double> elem_stiffness;  // instantaneous axial stiffness E_inst A / L, N/m
 
   // --- pin-jointed crimp stage (docs/MODEL.md §1): an element's apparent strain e = len / L0 - 1
   // takes up the crimp e_c = sqrt(L0^2 + L1^2) / L0 - 1 in a toe whose stiffness rises from

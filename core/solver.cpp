@@ -78,9 +78,7 @@ class SolverT final : public Solver {
     broken_flag_.assign(ne, 0);
     elem_force_.assign(ne, V3::Zero());
     elem_energy_.assign(ne, 0.0);
-    elem_diss_.assign(ne, 0.0);
     bend_force_.assign(model_.bend_k.size(), V3::Zero());
-    bend_energy_.assign(model_.bend_k.size(), 0.0);
     for (int e = 0; e < ne; ++e) {
       // Initial strain (slack for the straight-chord models).
       const Real len = (x_[model_.elem_b[e]] - x_[model_.elem_a[e]]).norm();
@@ -2052,7 +2050,7 @@ class SolverT final : public Solver {
   std::vector<Real> strain_, prev_strain_, ev_, stress_;
   std::vector<std::uint8_t> broken_flag_;
   std::vector<V3> elem_force_, bend_force_;
-  std::vector<double> elem_energy_, elem_diss_, bend_energy_;
+  std::vector<double> elem_energy_;
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
   std::vector<int> cr_kw_, cr_kf_;

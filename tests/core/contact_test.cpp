@@ -55,7 +55,6 @@ Model crossing_pair(double mu, int n = 5, bool clamp_weft = true) {
       m.elem_yarn.push_back(y);
       m.elem_rest.push_back(rest);
       m.elem_area.push_back(kArea);
-      m.elem_stiffness.push_back(kE * kArea / rest);
     }
   }
   m.yarn_elem_offset.push_back(int(m.elem_a.size()));
