@@ -297,9 +297,10 @@ void write_report(PaperState& ps) {
     for (const auto& w : result.warnings) md << "- " << w << "\n";
     md << "\n";
   }
+  // claims.json first: a report.md in the folder means its claims.json is there too.
+  write_file_atomic(opt.out_dir + "/claims.json", claims_json(ps));
   result.report_path = opt.out_dir + "/report.md";
   write_file_atomic(result.report_path, md.str());
-  write_file_atomic(opt.out_dir + "/claims.json", claims_json(ps));
 }
 
 // DIR/claims.json: the report's verdicts and ballistic limits for scripts (scripts/nightly):
