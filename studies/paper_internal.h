@@ -56,6 +56,19 @@ inline double seconds_since(std::chrono::steady_clock::time_point t) {
 
 constexpr double kDefaultFailure = 0.052;
 constexpr double kReferenceFriction = 0.2;
+// The ballistic limits the paper states in its text (§8): 71 m/s at mu = 0.1, 70 at 0.2, and
+// at mu = 0 about half of BL(0.1); "about" is read as within kPaperLimitTolerance. Used by the
+// Fig. 16 claim and chart, and written to claims.json for scripts/nightly.
+struct PaperLimit {
+  double mu, mps;
+};
+constexpr PaperLimit kPaperLimits[] = {{0.1, 71}, {0.2, 70}};
+constexpr double kPaperLimitTolerance = 0.10;  // relative
+inline double paper_limit(double mu) {
+  for (const PaperLimit& p : kPaperLimits)
+    if (p.mu == mu) return p.mps;
+  return NAN;
+}
 
 struct VelocityRow {
   double mu = 0, failure = 0, v = 0;

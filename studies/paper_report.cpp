@@ -153,7 +153,12 @@ void make_charts(PaperState& ps) {
       }
     }
     // The paper's text: 71 m/s at mu = 0.1, 70 at 0.2, and about half of BL(0.1) at mu = 0.
-    Series paper{"paper (stated in the text)", {0.0, 0.1, 0.2}, {35.5, 71, 70}, SeriesStyle::markers, 7, false};
+    Series paper{"paper (stated in the text)",
+                 {0.0, 0.1, 0.2},
+                 {paper_limit(0.1) / 2, paper_limit(0.1), paper_limit(0.2)},
+                 SeriesStyle::markers,
+                 7,
+                 false};
     c.series = {s, pin, paper};
     put(c, "fig16_ballistic_limit_vs_friction", "Ballistic limit vs friction, with the pin-jointed model (Fig. 16)");
   }
@@ -321,6 +326,11 @@ std::string claims_json(const PaperState& ps) {
   for (const auto& e : ps.limits) {
     json l = {{"label", e.label}, {"found", e.have && e.result.bracketed}};
     l["mu"] = std::isfinite(e.mu) ? json(e.mu) : json(nullptr);  // null: pin-jointed
+    // The paper's stated limit, where it states one (kPaperLimits), and the agreement bound.
+    if (std::isfinite(e.mu) && std::isfinite(paper_limit(e.mu))) {
+      l["paper_mps"] = paper_limit(e.mu);
+      l["paper_tolerance"] = kPaperLimitTolerance;
+    }
     int undecided = 0;
     for (const auto& s : e.result.runs) undecided += !s.decided;
     l["runs"] = e.result.runs.size();

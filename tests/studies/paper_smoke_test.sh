@@ -66,6 +66,9 @@ for l in j["limits"]:
         found += 1
         assert l["lo_mps"] < l["ballistic_limit_mps"] < l["hi_mps"], l
         assert l["runs"] >= 2, l
+for l in j["limits"]:  # the paper's stated limits (71 m/s at mu = 0.1, 70 at 0.2) go with them
+    paper = {0.1: 71, 0.2: 70}.get(l["mu"])
+    assert l.get("paper_mps") == paper and (paper is None or l["paper_tolerance"] == 0.1), l
 assert found >= 5, j["limits"]
 PY
 # Images need the offscreen renderer (absent in the sanitizer builds, where the report says so).
