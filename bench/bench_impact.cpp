@@ -9,7 +9,7 @@
 
 #include "../app/cli/omp_env.h"
 #include "scene.h"
-#include "contact_lanes.h"
+#include "solver/simd/contact_lanes.h"
 #include "simulation.h"
 #include "solver.h"
 

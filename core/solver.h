@@ -2,17 +2,31 @@
 //
 // Why this order (paper §2-4, SPEC §3): Eq 1-2 integrate the free motion first, then the
 // contact algorithms correct the *predicted* state, so that the state at the end of each
-// step is free of interpenetration:
+// step is free of interpenetration. step() runs exactly these, each in its own file under
+// core/solver/:
 //
-//   internal_forces     element strain -> Zener/elastic stress, bending springs, failure
-//   close_ledger_row    the ledger at t - dt/2 (needs this step's stored energy, see below)
-//   integrate           v += dt/m sum(f) (Eq 1), x += v dt (Eq 2), projectile free flight
-//   projectile_contact  normal push-out (Eq 18-19) and friction (Eq 20-22)
-//   yarn_contact        N passes of nearest-pair tracking, normal correction (Eq 5-11) and
-//                       stick/slip friction (Eq 12-15) on the predicted state; last, so
-//                       the yarn-yarn state is resolved at the end of every step
-//   finish_step         kinetic energy of the half-step velocities, the work of this
-//                       step's corrections, divergence checks
+//   internal_forces       element strain -> Zener/elastic stress, bending springs, failure
+//                         (internal_forces.cpp): the forces of Eq 1 from x(t)
+//   close_ledger_row      the ledger at t - dt/2 (ledger.cpp; needs this step's stored energy,
+//                         see below) and the energy-balance fault check (faults.cpp)
+//   integrate             v += dt/m sum(f) (Eq 1), x += v dt (Eq 2), projectile free flight
+//                         (integrate.cpp)
+//   projectile_contact    normal push-out (Eq 18-19) and friction (Eq 20-22)
+//                         (projectile_contact.cpp); before the yarn contact, so that the nodes
+//                         it pushed out rest on the projectile while the yarns are corrected
+//   yarn_contact          N passes of nearest-pair tracking, normal correction (Eq 5-11) with
+//                         the compression law and stick/slip friction (Eq 12-15) on the
+//                         predicted state (yarn_contact.cpp); last, so the yarn-yarn state is
+//                         resolved at the end of every step
+//   release_held          the yarn contact's push on nodes resting on the projectile, passed
+//                         to the projectile (projectile_contact.cpp)
+//   residual_penetration  every 8th step, the interpenetration left (a diagnostic,
+//                         yarn_contact.cpp)
+//   finish_step           kinetic energy of the half-step velocities, the work of this step's
+//                         corrections (ledger.cpp)
+//   check_projectile      every 16th step, a projectile gone non-finite or out of the domain
+//                         (faults.cpp; the node and energy checks run inside integrate and
+//                         close_ledger_row)
 //
 // Energy timing. Central differences carry velocities at half steps and positions at
 // whole steps. The ledger is therefore evaluated at half steps: kinetic energy from
@@ -60,7 +74,7 @@ class Solver {
   virtual void step() = 0;
   virtual void set_threads(int n) = 0;
   // Closest points of four crossings at once in AVX2 lanes where the processor has them
-  // (on by default; bit-identical to one at a time, see contact_lanes.h). simd_active():
+  // (on by default; bit-identical to one at a time, see solver/simd/contact_lanes.h). simd_active():
   // whether the lanes are used (on, double precision, an AVX2 processor).
   virtual void set_simd(bool on) = 0;
   virtual bool simd_active() const = 0;
@@ -123,6 +137,10 @@ class Solver {
   // Projectile contact history, for perforation detection.
   bool had_contact() const { return had_contact_; }
   double last_contact_time() const { return last_contact_time_; }
+  // Stop the run: the method broke (cause: a short tag, why: the sentence after "diverged at
+  // step N (t = T us): "). The solver's own checks call it (core/solver/faults.cpp), and so does
+  // Simulation for the faults it judges against the scene. Only the first fault is kept.
+  void fault(const std::string& cause, const std::string& why);
   // |ledger total - initial| / initial above this -> diverged.
   void set_max_balance_error(double f) { max_balance_error_ = f; }
 

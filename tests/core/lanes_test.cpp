@@ -1,4 +1,4 @@
-// The yarn contact's closest points in AVX2 lanes (core/contact_lanes.h): the geometry of
+// The yarn contact's closest points in AVX2 lanes (core/solver/simd/contact_lanes.h): the geometry of
 // known crossings, lanes independent of each other, and whole runs bit-identical to the
 // one-crossing-at-a-time code. Skipped (with a message) on processors without AVX2.
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 #include <cstring>
 #include <limits>
 
-#include "contact_lanes.h"
-#include "element_lanes.h"
+#include "solver/simd/contact_lanes.h"
+#include "solver/simd/element_lanes.h"
 #include "material.h"
 #include "fixture.h"
 #include "solver.h"

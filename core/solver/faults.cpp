@@ -1,0 +1,100 @@
+// Divergence (SPEC §4, docs/robustness.md): every check that stops a run because the method
+// broke, and the one place that records it (Solver::fault, also called by Simulation for the
+// faults it finds: the nearest-pair search lost at many crossings). The message has one form:
+// "diverged at step N (t = T us): why".
+#include <cstdio>
+
+#include "solver/solver_t.h"
+
+namespace ravel {
+
+namespace {
+std::string fmt_g(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.4g", v);
+  return b;
+}
+}  // namespace
+
+void Solver::fault(const std::string& cause, const std::string& why) {
+  if (!divergence_.empty()) return;  // the first fault is the one that stopped the run
+  divergence_ = "diverged at step " + std::to_string(steps_) + " (t = " + fmt_g(time_ * 1e6) + " us): " + why;
+  divergence_cause_ = cause;
+  divergence_step_ = steps_;
+  divergence_time_ = time_;
+}
+
+namespace detail {
+
+// The energy ledger against the impact energy, once per step (close_ledger_row).
+template <class Real>
+void SolverT<Real>::check_balance(double total) {
+  const double e0 = 0.5 * model_.projectile_mass * model_.impact_velocity * model_.impact_velocity;
+  if (!std::isfinite(total)) {
+    fault("non_finite", "the energy ledger became NaN/infinite (a node or element went non-finite)");
+  } else if (e0 > 0) {
+    // Every ledger term is computed from its own mechanism, so a ledger that no longer
+    // adds up to the initial energy means the integration has gone wrong. Two ways:
+    // unstable modes feeding energy in (fast: within a few hundred steps; tension-only
+    // yarns then shed it by breaking, so it never blows up), or the slow drift of a long
+    // run with hundreds of breaks at a coarse step (it vanishes as dt is lowered). The
+    // first stops the run; the second is a warning until it reaches 4x the limit.
+    const double err = std::abs(total - e0) / e0;
+    if (steps_ % kBalanceWindow == 0) {
+      balance_window_[(steps_ / kBalanceWindow) % 8] = err;
+    }
+    const double earlier = balance_window_[(steps_ / kBalanceWindow + 1) % 8];  // ~8 windows ago
+    const double recent = balance_window_[(steps_ / kBalanceWindow) % 8];       // this window's start
+    // Half the limit gained within one window (64 steps) is an instability even below the
+    // limit itself: a mode growing that fast breaks the yarns it runs in before the ledger
+    // reaches the limit (a pin-jointed patch at dt_factor 2 tore apart in 32 steps with 4.4 %
+    // created).
+    const bool jumped = err - recent > 0.5 * max_balance_error_;
+    const bool fast = jumped || err - earlier > 0.5 * max_balance_error_ || err > 4 * max_balance_error_;
+    if (err > max_balance_error_ || jumped) {
+      if (fast) {
+        fault("energy_balance", "the energy ledger is off by " + fmt_g(100 * (total - e0) / e0) +
+                                    " % of the impact energy (energy " + (total > e0 ? "created" : "lost") +
+                                    " without a mechanism): the explicit integration is unstable");
+      } else if (!diag_.balance_drift) {
+        diag_.balance_drift = true;
+        diag_.balance_drift_time = time_;
+      }
+    }
+  }
+}
+
+// Yarn nodes after the free update (integrate): non-finite, or far outside the fabric.
+template <class Real>
+void SolverT<Real>::check_positions(double max_r2) {
+  if (!std::isfinite(max_r2))
+    fault("non_finite", "a yarn node position became NaN/infinite");
+  else if (!(max_r2 < escape_radius2_))
+    fault("node_escaped", "a yarn node escaped the domain (more than 10 fabric sizes from the centre)");
+}
+
+// The projectile, every kProjectileCheckEvery steps (step): non-finite, or gone from the domain
+// without perforating (a broken contact) or without touching the fabric (it crossed the fabric
+// within one time step).
+template <class Real>
+void SolverT<Real>::check_projectile() {
+  const double r = double(xp_.norm());
+  if (!std::isfinite(r)) {
+    fault("non_finite", "the projectile's position became NaN/infinite");
+  } else if (r > 10 * (model_.half_width + model_.half_length) + 1) {
+    fault("projectile_left_domain",
+          std::string("the projectile left the domain (more than 10 fabric sizes from the centre) without ") +
+              (had_contact_ ? "perforating" : "touching the fabric: it crossed the fabric within one time step"));
+  }
+}
+
+// The two precisions (solver.h: Precision).
+template void SolverT<float>::check_balance(double);
+template void SolverT<double>::check_balance(double);
+template void SolverT<float>::check_positions(double);
+template void SolverT<double>::check_positions(double);
+template void SolverT<float>::check_projectile();
+template void SolverT<double>::check_projectile();
+
+}  // namespace detail
+}  // namespace ravel

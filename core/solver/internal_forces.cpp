@@ -1,0 +1,225 @@
+// Stage internal_forces (Eq 3, 23-25): element strain -> stress, failure, bending, nodal forces.
+#include "solver/solver_t.h"
+
+namespace ravel::detail {
+
+// One element's strain, stress update, failure and force (the one-element code the lanes mirror).
+// Returns whether the element failed in this step.
+template <class Real>
+inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail, bool breakable, double& stored,
+                                       double& diss, double& released, double& max_strain, double& damp) {
+  if (broken_flag_[e]) {
+    elem_force_[e].setZero();
+    return false;
+  }
+  const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
+  const Real len = dx.norm();
+  const double rest = model_.elem_rest[e];
+  Real eps = len / Real(rest) - Real(1);
+  const double vol = model_.elem_area[e] * rest;
+  // The yarn law's strain (the crimp stage's material strain for the pin-jointed model),
+  // and the force factor d(material strain)/d(strain): a crimped element's force is
+  // sigma A g'(e), the derivative of its stored energy.
+  Real mat = eps, dg = Real(1);
+  const double apparent = double(eps);  // against L0 (crimp_stage turns eps into the yarn's own strain)
+  if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
+  const double mat_prev = double(prev_strain_[e]);
+  double sig, u, dd = 0;
+  if (zener) {
+    const ZenerStep zs = zener_.step(double(prev_strain_[e]), double(mat), double(ev_[e]));
+    ev_[e] = Real(zs.ev);
+    sig = zs.stress;
+    u = zener_stored(zener_.c, sig, zs.ev) * vol;
+    dd = zs.dissipated * vol;
+  } else {
+    sig = mat > 0 ? E * double(mat) : 0.0;
+    u = sig * sig / (2 * E) * vol;
+  }
+  // Snap damping (solver.snap_damping, docs/MODEL.md §3): in the step a slack element turns
+  // taut its stress gains beta E_inst times its strain rate, never below zero; the work is
+  // booked as damping_J. Elements that stay taut (the waves) are not damped.
+  double sig_total = sig;
+  if (sig > 0 && damping_k_ > 0 && stress_[e] == Real(0)) {
+    const double de = double(mat) - mat_prev;
+    sig_total = std::max(0.0, sig + damping_k_ * de * zener_.inv_dt);
+    damp += (sig_total - sig) * de * vol;
+  }
+  // Crimp damping (yarn.crimp_damping, pin-jointed only, docs/MODEL.md §1): a taut element's
+  // force gains beta E A times its apparent strain rate, never below zero. It damps the
+  // lattice ringing a soft-then-stiff crimp stage radiates behind a steep front; slower waves
+  // are damped in proportion to their frequency. Its work is booked as damping_J, over each
+  // step's stretch at the mean of the damping stress at its two ends (the trapezoid; booking
+  // the end-of-step stress alone made the ledger error first order in dt).
+  double sig_force = sig_total * double(dg);
+  if (crimp_damping_k_ > 0) {
+    // strain_[e] still holds last step's own strain: its apparent strain a step ago.
+    const double de = apparent - ((1 + double(strain_[e])) * (1 + model_.crimp_strain) - 1);
+    double extra = 0;
+    if (sig > 0) {
+      const double f = std::max(0.0, sig_force + crimp_damping_k_ * de * zener_.inv_dt);
+      extra = f - sig_force;
+      sig_force = f;
+    }
+    damp += 0.5 * (double(crimp_damp_stress_[e]) + extra) * de * vol;
+    crimp_damp_stress_[e] = Real(extra);
+  }
+  prev_strain_[e] = mat;
+  strain_[e] = eps;
+  diss += dd;
+  if (breakable && double(eps) >= fail) {
+    // Failure: the element is removed for good, its energy is released (SPEC §1). It
+    // last pushed on its nodes at t - dt, over the half steps around t - dt: the energy
+    // it took from them is its energy at mid-step, its energy at t - dt plus half the work
+    // its stress then did over the step's change of strain. Booking the energy at t instead
+    // created f v dt / 2 per break (2 % of the impact energy in a near-limit run with 240
+    // breaks); the mean of t - dt and t is the same to second order but books, for an
+    // element stretched past failure within one step, the quadratic energy of a stretch it
+    // never resisted (20 % of the impact energy created over 4 ms of a slowly caught
+    // projectile at 73 m/s).
+    broken_flag_[e] = 1;
+    released += elem_energy_[e] + 0.5 * double(stress_[e]) * vol * (double(mat) - mat_prev);
+    stress_[e] = 0;
+    if (crimp_damping_k_ > 0) crimp_damp_stress_[e] = 0;
+    elem_force_[e].setZero();
+    return true;
+  }
+  elem_energy_[e] = u;
+  stored += u;
+  stress_[e] = Real(sig_total);
+  max_strain = std::max(max_strain, double(eps));
+  // Force on node b: -sigma A along the element (pulls b towards a).
+  elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig_force * model_.elem_area[e] / double(len))) : V3::Zero();
+  return false;
+}
+
+// ---------------------------------------------------------------- stages
+// Element strain from positions, constitutive update, failure, element force vectors,
+// bending springs, then gather into nodal forces.
+template <class Real>
+void SolverT<Real>::internal_forces() {
+  const int ne = model_.element_count;
+  const bool zener = model_.material == Material::zener;
+  const double E = model_.modulus_inst;
+  const double fail = model_.failure_strain;
+  const bool breakable = model_.breakable;
+  double stored = 0, diss = 0, released = 0, max_strain = 0, damp = 0;
+  int newly_broken[2] = {0, 0}, nbroke = 0;
+  // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
+  // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
+  // taken in element order either way.
+  const bool use_lanes = zener && lanes_on() && model_.crimp_strain == 0;
+  const int ng = (ne + kBatch - 1) / kBatch;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released, nbroke, damp) \
+  reduction(max : max_strain) if (threads_ > 1)
+  for (int grp = 0; grp < ng; ++grp) {
+    const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
+    if constexpr (std::is_same_v<Real, double>) {
+      bool intact = use_lanes && e1 - e0 == kBatch;
+      for (int e = e0; e < e1 && intact; ++e) intact = !broken_flag_[e];
+      if (intact) {
+        lanes::ElementBatch b;
+        b.x = x_[0].data();
+        b.a = &model_.elem_a[e0];
+        b.b = &model_.elem_b[e0];
+        b.rest = &model_.elem_rest[e0];
+        b.area = &model_.elem_area[e0];
+        b.k1 = zener_.c.k1, b.k2 = zener_.c.k2, b.mu = zener_.c.mu;
+        b.dt = zener_.dt, b.inv_dt = zener_.inv_dt, b.lam = zener_.lam, b.g = zener_.g;
+        b.decay = zener_.decay, b.slack_decay = zener_.slack_decay;
+        b.fail = fail;
+        b.breakable = breakable;
+        b.damping_k = damping_k_;
+        b.prev_strain = &prev_strain_[e0];
+        b.ev = &ev_[e0];
+        b.strain = &strain_[e0];
+        b.stress = &stress_[e0];
+        b.energy = &elem_energy_[e0];
+        b.force = elem_force_[e0].data();
+        if (lanes::zener4(b)) {
+          for (int l = 0; l < kBatch; ++l) {
+            diss += b.dd[l];
+            damp += b.dw[l];
+            stored += b.u[l];
+            max_strain = std::max(max_strain, b.eps[l]);
+          }
+          continue;
+        }
+      }
+    }
+    for (int e = e0; e < e1; ++e)
+      nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain, damp);
+  }
+  // Count failures serially to keep the count per family (only in a step with one).
+  for (int e = 0; e < ne && nbroke > 0; ++e) {
+    if (broken_flag_[e] == 1) {
+      broken_flag_[e] = 2;
+      newly_broken[model_.yarn_family[model_.elem_yarn[e]]]++;
+    }
+  }
+  broken_[0] += newly_broken[0];
+  broken_[1] += newly_broken[1];
+  // Bending: compression-only springs between midpoints of adjoining elements.
+  const int nbend = int(model_.bend_k.size());
+  double bend_stored = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : bend_stored) if (threads_ > 1)
+  for (int s = 0; s < nbend; ++s) {
+    const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+    if (broken_flag_[e1] || broken_flag_[e2]) {
+      bend_force_[s].setZero();
+      continue;
+    }
+    const int ax = model_.bend_mirror[s];
+    if (ax >= 0) {
+      // Against the mirror image: midpoint distance 2 |M_ax|; pushes M away from the
+      // plane. Half of the spring's energy belongs to this side of the plane.
+      const Real mc = Real(0.5) * (x_[model_.elem_a[e1]][ax] + x_[model_.elem_b[e1]][ax]);
+      const double comp = model_.bend_rest[s] - 2 * std::abs(double(mc));
+      bend_force_[s].setZero();
+      if (comp > 0) {
+        bend_stored += 0.25 * model_.bend_k[s] * comp * comp;
+        bend_force_[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
+      }
+      continue;
+    }
+    const V3 m1 = Real(0.5) * (x_[model_.elem_a[e1]] + x_[model_.elem_b[e1]]);
+    const V3 m2 = Real(0.5) * (x_[model_.elem_a[e2]] + x_[model_.elem_b[e2]]);
+    const V3 d = m2 - m1;
+    const Real len = d.norm();
+    const double r = model_.bend_rest[s], k = model_.bend_k[s], sl = double(len);
+    if (sl >= r) {
+      bend_force_[s].setZero();
+      continue;
+    }
+    // Compression-only spring 1/2 k (r - s)^2, pushing midpoint 2 away from 1. Below
+    // s = r/2 (a yarn folded back on itself, e.g. a broken end whipping) the potential
+    // continues as k r^2/4 - k s^2/2, whose force k d stays smooth through s = 0, where
+    // the cone of 1/2 k (r - s)^2 would flip direction from one step to the next.
+    if (sl >= 0.5 * r) {
+      bend_stored += 0.5 * k * (r - sl) * (r - sl);
+      bend_force_[s] = d * Real(k * (r - sl) / sl);
+    } else {
+      bend_stored += 0.25 * k * r * r - 0.5 * k * sl * sl;
+      bend_force_[s] = d * Real(k);
+    }
+  }
+  // Gather.
+  const int n = model_.node_count;
+#pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
+  for (int i = 0; i < n; ++i) {
+    V3 f = V3::Zero();
+    for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) f += inc_e_[k].second * elem_force_[inc_e_[k].first];
+    for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * bend_force_[inc_b_[k].first];
+    f_[i] = f;
+  }
+  stored_now_ = stored + bend_stored;
+  damping_cum_ += damp;
+  viscous_cum_ += diss;
+  released_cum_ += released;
+  max_strain_ = max_strain;
+}
+
+// The two precisions (solver.h: Precision).
+template void SolverT<float>::internal_forces();
+template void SolverT<double>::internal_forces();
+
+}  // namespace ravel::detail

@@ -1,0 +1,938 @@
+// Stage yarn_contact (Eq 5-17): crossing tracking, closest points, the normal correction with
+// the compression law, stick/slip friction.
+#include "solver/solver_t.h"
+
+namespace ravel::detail {
+
+// Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
+template <class Real>
+inline auto SolverT<Real>::arc_between(int yarn, double u0, double u1, const KnownLengths& known) const -> Real {
+  // Both ends on one segment of known length (the usual stuck contact): (u1 - u0) times
+  // that length, which is what the general walk below gives then too.
+  if (const int a = floor_int(u0); unsigned(a - known.first) < 2u && a == floor_int(u1))
+    return Real(u1 - u0) * known.len[a - known.first];
+  auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
+  const int n = model_.yarn_size(yarn);
+  double sign = 1;
+  if (u1 < u0) std::swap(u0, u1), sign = -1;
+  int s0 = std::min(floor_int(u0), n - 2), s1 = std::min(floor_int(u1), n - 2);
+  if (s0 == s1) return Real(sign * (u1 - u0)) * seg_len(yarn, s0);
+  Real acc = Real(s0 + 1 - u0) * seg_len(yarn, s0);
+  for (int s = s0 + 1; s < s1; ++s) acc += seg_len(yarn, s);
+  acc += Real(u1 - s1) * seg_len(yarn, s1);
+  return Real(sign) * acc;
+}
+
+// Material coordinate reached by moving an arc length `arc` (signed) from u.
+template <class Real>
+inline double SolverT<Real>::advance(int yarn, double u, double arc, const KnownLengths& known) const {
+  auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
+  const int n = model_.yarn_size(yarn);
+  int s = std::min(floor_int(u), n - 2);
+  double frac = u - s;
+  while (true) {
+    const double L = double(seg_len(yarn, s));
+    if (L <= 0) return u;
+    const double room = arc >= 0 ? (1 - frac) * L : frac * L;
+    if (std::abs(arc) <= room || (arc >= 0 ? s == n - 2 : s == 0)) {
+      double nf = frac + arc / L;
+      return s + std::clamp(nf, 0.0, 1.0);
+    }
+    arc += arc >= 0 ? -room : room;
+    if (arc >= 0)
+      ++s, frac = 0;
+    else
+      --s, frac = 1;
+  }
+}
+
+template <class Real>
+RAVEL_INLINE auto SolverT<Real>::window_ids(const Crossing& cr, int kw, int kf) const -> WindowIds {
+  WindowIds id;
+  id.kw = kw;
+  id.kf = kf;
+  const int* wn = &model_.yarn_nodes[model_.yarn_offset[cr.warp_yarn]];  // node ids by position along the yarn
+  const int* fn = &model_.yarn_nodes[model_.yarn_offset[cr.weft_yarn]];
+  const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
+  for (int k = 0; k < 3; ++k) {
+    const int iw = kw - 1 + k, jf = kf - 1 + k;
+    id.node[k] = (iw >= 0 && iw < nw) ? wn[iw] : -1;
+    id.node[3 + k] = (jf >= 0 && jf < nf) ? fn[jf] : -1;
+  }
+  id.wseg0 = model_.yarn_elem_offset[cr.warp_yarn] + kw - 1;
+  id.fseg0 = model_.yarn_elem_offset[cr.weft_yarn] + kf - 1;
+  id.exists = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int sw = kw - 1 + k, sf = kf - 1 + k;
+    if (sw >= 0 && sw + 1 < nw) id.exists |= std::uint8_t(1 << k);
+    if (sf >= 0 && sf + 1 < nf) id.exists |= std::uint8_t(4 << k);
+  }
+  return id;
+}
+
+// The nodes' positions and whether the four segments next to the pair are intact.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::load_window(const WindowIds& id, Window& w) const {
+  w.kw = id.kw;
+  w.kf = id.kf;
+  for (int k = 0; k < 3; ++k) {
+    w.wnode[k] = id.node[k];
+    w.fnode[k] = id.node[3 + k];
+    if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
+    if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
+  }
+  for (int k = 0; k < 2; ++k) {
+    w.wseg[k] = (id.exists >> k & 1) && !broken_flag_[id.wseg0 + k];
+    w.fseg[k] = (id.exists >> (2 + k) & 1) && !broken_flag_[id.fseg0 + k];
+  }
+}
+
+// The window of crossing c around its tracked pair.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::load_window(int c, Window& w) {
+  WindowIds& id = cr_win_[c];
+  if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) id = window_ids(model_.crossings[c], cr_kw_[c], cr_kf_[c]);
+  load_window(id, w);
+}
+
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::load_window(const Crossing& cr, int kw, int kf, Window& w) const {
+  load_window(window_ids(cr, kw, kf), w);
+}
+
+// Nearest node pair tracking: search the 3 x 3 neighbours (paper Fig. 2). A move at the
+// edge of the window is searched once more; moving again means the yarns slid more than
+// one node in one step, which the method assumes never happens: reported, not hidden.
+// Returns true in that case; `w` is left loaded around the tracked pair.
+template <class Real>
+inline bool SolverT<Real>::track(int c, Window& w, bool loaded) {
+  const Crossing& cr = model_.crossings[c];
+  bool skipped = false;
+  if (!loaded) load_window(c, w);
+  for (int round = 0; round < 4; ++round) {
+    int bw = 1, bf = 1;
+    Real best = (w.xf[1] - w.xw[1]).squaredNorm();
+    for (int iw = 0; iw < 3; ++iw) {
+      if (w.wnode[iw] < 0) continue;
+      for (int jf = 0; jf < 3; ++jf) {
+        if (w.fnode[jf] < 0 || (iw == 1 && jf == 1)) continue;
+        const Real d2 = (w.xf[jf] - w.xw[iw]).squaredNorm();
+        if (d2 < best) best = d2, bw = iw, bf = jf;
+      }
+    }
+    if (bw == 1 && bf == 1) break;
+    cr_kw_[c] += bw - 1;
+    cr_kf_[c] += bf - 1;
+    if (round >= 1) skipped = true;
+    load_window(cr, cr_kw_[c], cr_kf_[c], w);
+  }
+  return skipped;
+}
+
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::release(int c, std::uint8_t why) {
+  cr_active_[c] = 0;
+  cr_stick_e_[c] = 0;  // the penalty spring lets go (its energy then shows as friction work)
+  cr_fn_[c] = cr_ft_[c] = cr_slip_[c] = 0;
+  cr_sliding_[c] = 0;
+  cr_event_[c] |= why;
+}
+
+template <class Real>
+inline auto SolverT<Real>::closest(const Crossing& cr, const Window& w) const -> ContactGeom {
+  ContactGeom g{};
+  g.d.setZero();
+  g.lane = -1;
+  g.moved = false;
+  const int kw = w.kw, kf = w.kf;
+  // The up to 2 segments of each yarn next to the tracked node: start point, direction,
+  // squared length (done once, each segment serves two pairs).
+  V3 p0[2], d1[2], q0[2], d2[2];
+  Real aa[2], ee[2];
+  int sws[2], sfs[2], nw = 0, nf = 0;
+  for (int k = 0; k < 2; ++k) {
+    if (!w.wseg[k]) continue;
+    p0[nw] = w.xw[k];
+    d1[nw] = w.xw[k + 1] - p0[nw];
+    aa[nw] = d1[nw].squaredNorm();
+    sws[nw++] = kw - 1 + k;
+  }
+  for (int k = 0; k < 2; ++k) {
+    if (!w.fseg[k]) continue;
+    q0[nf] = w.xf[k];
+    d2[nf] = w.xf[k + 1] - q0[nf];
+    ee[nf] = d2[nf].squaredNorm();
+    sfs[nf++] = kf - 1 + k;
+  }
+  if (nw == 0 || nf == 0) return g;
+  // The first closest pair is chosen below; this default only stands when no distance
+  // compares (a NaN state, which the ledger check then stops), and keeps g.sw / g.sf
+  // inside the window.
+  g.sw = sws[0];
+  g.sf = sfs[0];
+  struct Cand {
+    int iw, jf;
+    Real a, b, dist2;
+    V3 d;
+  } cand[4];
+  int nc = 0;
+  Real best2 = Real(1e30);
+  for (int i = 0; i < nw; ++i)
+    for (int j = 0; j < nf; ++j) {
+      // Segment-segment closest points (Eq 8, clamped; Ericson 5.1.9), inlined with the
+      // segments' squared lengths reused.
+      const V3 r = p0[i] - q0[j];
+      const Real A = aa[i], E = ee[j], F = d2[j].dot(r);
+      const Real C = d1[i].dot(r), B = d1[i].dot(d2[j]);
+      const Real denom = A * E - B * B;
+      Real sa = denom > Real(1e-12) * A * E ? std::clamp((B * F - C * E) / denom, Real(0), Real(1)) : Real(0);
+      Real tb = (B * sa + F) / E;
+      if (tb < Real(0)) {
+        tb = 0;
+        sa = std::clamp(-C / A, Real(0), Real(1));
+      } else if (tb > Real(1)) {
+        tb = 1;
+        sa = std::clamp((B - C) / A, Real(0), Real(1));
+      }
+      Cand& q = cand[nc++];
+      q.iw = i;
+      q.jf = j;
+      q.a = sa;
+      q.b = tb;
+      q.d = (q0[j] + tb * d2[j]) - (p0[i] + sa * d1[i]);
+      q.dist2 = q.d.squaredNorm();
+      best2 = std::min(best2, q.dist2);
+    }
+  // Pairs within kTieBand * D of the closest share the contact, with weights falling
+  // linearly from 1 (closest) to 0 (band edge): the contact point moves continuously
+  // when two pairs swap places.
+  const Real best = std::sqrt(best2);
+  const Real band = Real(kTieBand) * Real(cr.contact_distance), inv_band = Real(1) / band;
+  const Real reach2 = (best + band) * (best + band);
+  Real wsum = 0;
+  bool first = true;
+  for (int k = 0; k < nc; ++k) {
+    const Cand& q = cand[k];
+    if (q.dist2 == best2 && first) {
+      g.sw = sws[q.iw], g.sf = sfs[q.jf], g.a = q.a, g.b = q.b;
+      first = false;
+    }
+    if (q.dist2 >= reach2) continue;
+    const Real wq = Real(1) - (std::sqrt(q.dist2) - best) * inv_band;
+    if (wq <= Real(0)) continue;
+    wsum += wq;
+    g.d += wq * q.d;
+    const int iw = sws[q.iw] - (kw - 1), jf = sfs[q.jf] - (kf - 1);
+    g.ww[iw] += wq * (Real(1) - q.a);
+    g.ww[iw + 1] += wq * q.a;
+    g.wf[jf] += wq * (Real(1) - q.b);
+    g.wf[jf + 1] += wq * q.b;
+  }
+  const Real inv = Real(1) / wsum;
+  g.d *= inv;
+  for (int k = 0; k < 3; ++k) g.ww[k] *= inv, g.wf[k] *= inv;
+  g.dist = best;
+  g.ok = true;
+  return g;
+}
+
+// Is the contact point at an end of the yarn beyond which it has no segment, with the
+// partner lying beyond that end? Then the partner has slipped off (ravelled out).
+template <class Real>
+RAVEL_INLINE bool SolverT<Real>::slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
+  const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
+                      !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
+  const bool at_start =
+      frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) && !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
+  if (!at_end && !at_start) return false;
+  const V3 t = x_[ynode(yarn, seg + 1)] - x_[ynode(yarn, seg)];
+  const Real L = t.norm();
+  if (L <= Real(0)) return false;
+  const Real along = toward_partner.dot(t) / L;
+  const Real dist = toward_partner.norm();
+  return at_end ? along > Real(0.5) * dist : -along > Real(0.5) * dist;
+}
+
+// Material coordinate (node index + fraction) of point p along a yarn near node k:
+// projection on the chord joining k's neighbours (unit direction returned in `tangent`).
+template <class Real>
+inline double SolverT<Real>::chord_coord(int yarn, int k, const V3* xs, const bool* seg, const V3& p,
+                                         V3& tangent) const {
+  // xs: positions of nodes k-1, k, k+1; seg: segments k-1 and k intact (a Window's).
+  const int km = seg[0] ? k - 1 : k;
+  const int kp = seg[1] ? k + 1 : k;
+  V3 xm = xs[km - k + 1];
+  int span = kp - km;
+  const int ax = model_.yarn_start_mirror[yarn];
+  if (k == 0 && ax >= 0 && kp == 1) {
+    // Node 0 sits on a symmetry plane: its other neighbour is node 1's mirror image, and
+    // contacts on the mirror side belong to the mirror crossing (offset clamped to >= 0).
+    xm = xs[2];
+    xm[ax] = -xm[ax];
+    span = 2;
+  }
+  const V3 T = xs[kp - k + 1] - xm;
+  const Real T2 = T.squaredNorm();
+  if (span == 0 || T2 <= Real(0)) {
+    tangent.setZero();
+    return k;
+  }
+  tangent = T * (Real(1) / std::sqrt(T2));
+  // Projection on the chord, mapped piecewise so that the nodes keep their own coordinates:
+  // node k - 1, k, k + 1 project to k - 1, k, k + 1 whatever the chord's proportions. A
+  // linear map centred on node k gave a point between nodes k and k + 1 a coordinate that
+  // differed from the one the next node's chord gives it, so a contact jumped (by up to 30
+  // um on yarns bent at the free edges) when its tracked node changed: a slip that no yarn
+  // made, with friction against it.
+  const double h = double((p - xs[1]).dot(T) / T2);
+  double off = h * double(span);
+  if (span == 2) {
+    const double tk = double((xs[1] - xm).dot(T) / T2);  // node k's own place on the chord
+    if (tk > lanes::kChordNodeMin && tk < 1 - lanes::kChordNodeMin) off = h < 0 ? h / tk : h / (1 - tk);
+  }
+  const double lo = (k == 0 && ax >= 0) ? 0.0 : double(km - k);
+  return k + std::clamp(off, lo, double(kp - k));
+}
+
+// The two nodes and fraction of a material coordinate.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
+  const int s = std::clamp(floor_int(u), 0, model_.yarn_size(yarn) - 2);
+  frac = Real(std::clamp(u - s, 0.0, 1.0));
+  n0 = ynode(yarn, s);
+  n1 = ynode(yarn, s + 1);
+}
+
+// The closest points of the crossings c in [c0, c1) with on[c - c0] set, from their loaded
+// windows: the lane windows together in lanes (when on and the processor has them; the
+// same numbers bit for bit), the others one at a time.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g,
+                                               lanes::ClosestBatch& lb) const {
+  int lane[kBatch];
+  int nl = 0;
+  for (int c = c0; c < c1; ++c) {
+    const int k = c - c0;
+    lane[k] = -1;
+    if (!on[k]) continue;
+    const Crossing& cr = model_.crossings[c];
+    if constexpr (std::is_same_v<Real, double>) {
+      if (lane_window(w[k])) {
+        lb.xw[nl] = w[k].xw[0].data();  // V3 xw[3]: 9 consecutive doubles
+        lb.xf[nl] = w[k].xf[0].data();
+        lb.band[nl] = double(Real(kTieBand) * Real(cr.contact_distance));
+        lb.side[nl] = cr.side;
+        lane[k] = nl++;
+        continue;
+      }
+    }
+    g[k] = closest(cr, w[k]);
+  }
+  if (nl > 0) {
+    // Unused lanes repeat lane 0 (their results are not read).
+    for (int l = nl; l < lanes::kWidth; ++l)
+      lb.xw[l] = lb.xw[0], lb.xf[l] = lb.xf[0], lb.band[l] = lb.band[0], lb.side[l] = lb.side[0];
+    lanes::closest4(lb);
+    for (int k = 0; k < c1 - c0; ++k) {
+      const int l = lane[k];
+      if (l < 0) continue;
+      ContactGeom& q = g[k];
+      q.ok = true;
+      q.sw = w[k].kw - 1 + int(lb.iw[l]);
+      q.sf = w[k].kf - 1 + int(lb.jf[l]);
+      q.a = Real(lb.a[l]);
+      q.b = Real(lb.b[l]);
+      q.d = V3(Real(lb.d[0][l]), Real(lb.d[1][l]), Real(lb.d[2][l]));
+      q.dist = Real(lb.dist[l]);
+      for (int n = 0; n < 3; ++n) q.ww[n] = Real(lb.ww[n][l]), q.wf[n] = Real(lb.wf[n][l]);
+      q.lane = l;
+      q.moved = lb.moved[l] != 0;
+    }
+  }
+}
+
+template <class Real>
+void SolverT<Real>::yarn_contact() {
+  const int nc = int(model_.crossings.size());
+  const int N = model_.contact_iterations;
+  impulses_.resize(nc);  // (cr_fn_step_, cr_ft_ and cr_event_ are cleared by each crossing's first pass)
+  for (int pass = 1; pass <= N; ++pass) {
+    // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
+    const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
+    const bool first = pass == 1, last = pass == N;
+    if (threads_ > 1) {
+      // Every crossing's corrections from the same state (Jacobi), then applied: each
+      // thread owns a range of nodes and applies, in crossing order, the changes that
+      // fall in its range: race-free, and the same sums whatever the number of threads.
+      const int nb = (nc + kBatch - 1) / kBatch;
+      rec_first_.resize(nc);
+      rec_last_.resize(nc);
+#pragma omp parallel for num_threads(threads_) schedule(static)
+      for (int b = 0; b < nb; ++b) {
+        const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
+        crossing_batch(c0, c1, alpha, first, last, &impulses_[c0]);
+        for (int c = c0; c < c1; ++c) {
+          // The lowest and highest node the record can touch.
+          const CrossingImpulse& r = impulses_[c];
+          int a = std::numeric_limits<int>::max(), z = -1;
+          auto take = [&](const int* nodes, int count) {
+            for (int k = 0; k < count; ++k)
+              if (nodes[k] >= 0) a = std::min(a, nodes[k]), z = std::max(z, nodes[k]);
+          };
+          if (r.has_n || r.has_s || r.has_c) take(r.node, 6);
+          if (r.has_f) take(r.fnode, 4);
+          rec_first_[c] = a;
+          rec_last_[c] = z;
+        }
+      }
+      // Running maximum of the highest node and running minimum (from the end) of the
+      // lowest: a node range [lo, hi) is touched only by records between the first
+      // crossing whose running maximum reaches lo and the last whose running minimum is
+      // below hi. With the node numbering of model.cpp that is about 1/T of them each.
+      for (int c = 1; c < nc; ++c) rec_last_[c] = std::max(rec_last_[c], rec_last_[c - 1]);
+      for (int c = nc - 2; c >= 0; --c) rec_first_[c] = std::min(rec_first_[c], rec_first_[c + 1]);
+#pragma omp parallel num_threads(threads_)
+      {
+        int lo, hi, t;
+        my_share(model_.node_count, lo, hi, t);
+        const int c_first = int(std::lower_bound(rec_last_.begin(), rec_last_.end(), lo) - rec_last_.begin());
+        const int c_end = int(std::lower_bound(rec_first_.begin(), rec_first_.end(), hi) - rec_first_.begin());
+        for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
+        finish_pass(lo, hi);
+      }
+    } else {
+      // One thread: the same sums, gathered as each crossing is done (nothing a crossing
+      // reads changes until finish_pass). Held nodes take their corrections one by one,
+      // which moves them: those wait until every crossing is done, then go in crossing order.
+      held_records_.clear();
+      CrossingImpulse rs[kBatch];
+      for (int c0 = 0; c0 < nc; c0 += kBatch) {
+        const int c1 = std::min(nc, c0 + kBatch);
+        crossing_batch(c0, c1, alpha, first, last, rs);
+        for (int c = c0; c < c1; ++c)
+          if (gather(rs[c - c0], 0, model_.node_count, kSums)) held_records_.push_back(rs[c - c0]);
+      }
+      for (const CrossingImpulse& r : held_records_) gather(r, 0, model_.node_count, kHeld);
+      finish_pass(0, model_.node_count);
+    }
+  }
+  // Book what broke the method's assumptions, in crossing order; sum the normal forces and
+  // count sliding and stuck crossings.
+  double fsum = 0, usum = 0, esum = 0;
+  int sliding = 0, stuck = 0;
+  for (int c = 0; c < nc; ++c) {
+    // How far the two yarns' material moved against each other this step: the offset of
+    // last step's tracked node pair, then and now (the pair may have been re-chosen since).
+    const LastPair was = cr_last_[c];
+    const Real moved = (pair_offset(c, was.kw, was.kf) - was.offset).norm();
+    cr_last_[c] = {cr_kw_[c], cr_kf_[c], pair_offset(c, cr_kw_[c], cr_kf_[c])};
+    if (cr_active_[c]) {
+      fsum += cr_fn_[c];
+      usum += cr_u_[c];
+      esum += cr_stick_e_[c];
+      if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
+      // Material slip: the stick point's advance, but never faster than the yarns move
+      // against each other (a jump of the closest point along a kinked or re-paired
+      // yarn is not slip).
+      cr_slip_[c] = std::min(cr_slip_[c], double(moved) / double(model_.dt));
+    }
+    std::uint8_t ev = cr_event_[c];
+    if (!ev) continue;
+    const Crossing& cr = model_.crossings[c];
+    auto note = [&](long& count, double& t, int& i, int& j) {
+      if (count++ == 0) t = time_, i = cr.grid_i, j = cr.grid_j;
+    };
+    // A pair that moved more than one node while the yarns moved less than half a node
+    // against each other was re-chosen by the changed shape (yarns folded, bunched or apart
+    // near the projectile), not outrun: a smaller time step would not change it.
+    if ((ev & ev_skip) && moved < Real(0.5) * Real(model_.elem_rest[model_.yarn_elem_offset[cr.warp_yarn]])) {
+      ev &= std::uint8_t(~ev_skip);
+      note(diag_.repaired, diag_.first_repair_time, diag_.first_repair_i, diag_.first_repair_j);
+    }
+    if (ev & ev_skip) note(diag_.skipped_nodes, diag_.first_skip_time, diag_.first_skip_i, diag_.first_skip_j);
+    if (ev & ev_ravel) note(diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+    if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
+    if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
+    if (ev & ev_separated) ++diag_.separated;
+  }
+  yarn_force_ = fsum;
+  compress_end_ = usum;
+  stick_end_ = esum;
+  sliding_count_ = sliding;
+  stuck_count_ = stuck;
+}
+
+template <class Real>
+RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi, int what) {
+  if (!r.any_held && (what & kSums)) {
+    // The common case, no held node: every weight on a node in [lo, hi) goes to the sums.
+    const unsigned span = unsigned(hi - lo);
+    auto each = [lo, span](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
+      for (int k = 0; k < count; ++k)
+        if (unsigned(nodes[k] - lo) < span && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
+    };
+    if (r.has_n) each(6, r.node, r.w, r.P, sum_n_.data());
+    if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_.data());
+    if (r.has_s) each(6, r.node, r.w, r.S, sum_s_.data());
+    if (r.has_c) each(6, r.node, r.w, r.C, sum_c_.data());
+    return false;
+  }
+  bool held = false;
+  // One kind of correction: weights w on nodes, times the vector q.
+  auto each = [&](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum, auto&& take_held) {
+    for (int k = 0; k < count; ++k) {
+      const int i = nodes[k];
+      if (unsigned(i - lo) >= unsigned(hi - lo) || w[k] == Real(0)) continue;  // i in [lo, hi), -1 not
+      if (held_flag_[i]) {
+        held = true;
+        if (what & kHeld) take_held(i, w[k] * q);
+      } else if (what & kSums) {
+        sum[i] += w[k] * q;
+      }
+    }
+  };
+  if (r.has_n)
+    each(6, r.node, r.w, r.P, sum_n_, [&](int i, const V3& p) { apply_impulse(i, p, &dv_contact_, r.hold, nullptr); });
+  if (r.has_f)
+    each(4, r.fnode, r.fw, r.F, sum_f_,
+         [&](int i, const V3& p) { apply_impulse(i, p, &dv_friction_, r.hold, &held_fric_); });
+  if (r.has_s) each(6, r.node, r.w, r.S, sum_s_, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
+  if (r.has_c)
+    each(6, r.node, r.w, r.C, sum_c_,
+         [&](int i, const V3& p) { apply_impulse(i, p, &dv_compress_, r.hold, &held_comp_); });
+  return held;
+}
+
+// Apply the pass's gathered sums to the nodes in [lo, hi).
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
+  const Real dt = Real(model_.dt);
+  for (int i = lo; i < hi; ++i) {
+    const Real im = Real(model_.inv_mass[i]);
+    const std::uint8_t fx = model_.fixed[i];
+    V3 dvn = im * sum_n_[i], dvf = im * sum_f_[i], dx = im * sum_s_[i];
+    sum_n_[i].setZero();
+    sum_f_[i].setZero();
+    sum_s_[i].setZero();
+    if (fx) {
+      zero_fixed(dvn, fx);
+      zero_fixed(dvf, fx);
+      zero_fixed(dx, fx);
+    }
+    V3 dv = dvn + dvf;
+    if (compressible_) {
+      V3 dvc = im * sum_c_[i];
+      sum_c_[i].setZero();
+      if (fx) zero_fixed(dvc, fx);
+      dv += dvc;
+      dv_compress_[i] += dvc;
+    }
+    v_[i] += dv;
+    dv_contact_[i] += dvn;
+    dv_friction_[i] += dvf;
+    x_[i] += dt * dv + dx;
+    dx_contact_[i] += dx;
+  }
+}
+
+// `acc`: where the node's velocity change is summed for the ledger's work of this kind of
+// correction; `part`: per node, where the share passed to the projectile is also summed
+// (friction and compression, whose work on the projectile is their own; null: the normal
+// correction's).
+template <class Real>
+inline void SolverT<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part) {
+  const Real im = Real(model_.inv_mass[i]);
+  if (im == Real(0)) return;
+  const Real pn = P.dot(held_n_[i]);
+  if (hold && pn < Real(0)) {
+    // Held by the projectile: the part pushing into it passes to the projectile.
+    held_imp_[i] += pn * held_n_[i];
+    if (part) (*part)[i] += pn * held_n_[i];
+    P -= pn * held_n_[i];
+  }
+  V3 dv = im * P;
+  zero_fixed(dv, model_.fixed[i]);
+  v_[i] += dv;
+  if (acc) (*acc)[i] += dv;
+  x_[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
+}
+
+// Move a node by a mass-weighted shift (no velocity change); recorded for the ledger.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::shift_node(int i, const V3& S, bool hold) {
+  const Real im = Real(model_.inv_mass[i]);
+  if (im == Real(0)) return;
+  V3 dx = im * S;
+  const Real dn = dx.dot(held_n_[i]);
+  if (hold && dn < Real(0)) dx -= dn * held_n_[i];  // not into the projectile that holds it
+  zero_fixed(dx, model_.fixed[i]);
+  x_[i] += dx;
+  dx_contact_[i] += dx;
+}
+
+// `first`: the step's first pass, which clears the crossings' per-step state.
+template <class Real>
+inline void SolverT<Real>::crossing_batch(int c0, int c1, Real alpha, bool first, bool last, CrossingImpulse* out) {
+  Window w[kBatch];
+  ContactGeom g[kBatch];
+  bool on[kBatch];
+  bool tracked[kBatch];
+  if (first) {
+    for (int c = c0; c < c1; ++c) cr_fn_step_[c] = 0, cr_ft_[c] = 0, cr_event_[c] = 0, cr_u_[c] = 0;
+  }
+  for (int c = c0; c < c1; ++c) {
+    const int k = c - c0;
+    CrossingImpulse& r = out[k];
+    r.has_n = r.has_f = r.has_s = r.has_c = r.hold = r.any_held = false;
+    on[k] = cr_active_[c];
+    tracked[k] = false;
+    if (!on[k]) continue;
+    load_window(c, w[k]);
+    // Windows the lanes take are searched there (and here again only if the pair moves).
+    if (lane_window(w[k])) continue;
+    if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+    tracked[k] = true;
+  }
+  lanes::ClosestBatch lb;
+  closest_batch(c0, c1, on, w, g, lb);
+  for (int c = c0; c < c1; ++c) {
+    const int k = c - c0;
+    if (!on[k] || tracked[k] || !g[k].moved) continue;
+    // The nearest pair moved: the one-crossing search from here, then its closest points.
+    if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+    g[k] = closest(model_.crossings[c], w[k]);
+  }
+  // The rest of each crossing, in three stages over the batch: each stage is a chain of
+  // square roots and divisions, and four independent chains side by side keep the
+  // processor busy where one crossing at a time would wait on each (same operations).
+  bool go[kBatch];
+  FrictionSetup fs[kBatch];
+  for (int c = c0; c < c1; ++c)
+    go[c - c0] = on[c - c0] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], lb, out[c - c0]);
+  for (int c = c0; c < c1; ++c)
+    if (go[c - c0]) friction_setup(c, w[c - c0], g[c - c0], lb, out[c - c0], fs[c - c0]);
+  for (int c = c0; c < c1; ++c)
+    if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
+}
+
+// Normal correction of one tracked crossing in one pass, given its window and closest
+// points. Returns whether the crossing goes on to friction (not released, not clamped).
+template <class Real>
+RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g,
+                                             const lanes::ClosestBatch& lb, CrossingImpulse& r) {
+  const Crossing& cr = model_.crossings[c];
+  const Real dt = Real(model_.dt);
+  if (!g.ok) {
+    release(c, ev_lost);  // both adjoining segments of a yarn are broken
+    return false;
+  }
+  // Ravelled out: the partner has slipped off a free (or broken) end.
+  if (slipped_off(cr.warp_yarn, g.sw, g.a, g.d) || slipped_off(cr.weft_yarn, g.sf, g.b, V3(-g.d))) {
+    release(c, ev_ravel);
+    return false;
+  }
+  for (int k = 0; k < 3; ++k) {
+    r.node[k] = w.wnode[k];
+    r.node[3 + k] = w.fnode[k];
+    r.w[k] = -g.ww[k];
+    r.w[3 + k] = g.wf[k];
+  }
+  // Side test: n from the weave's fixed sign and the current segment directions (from the
+  // lanes when they did this crossing: the same numbers).
+  const int l = g.lane;
+  V3 n;
+  Real dlen;
+  if (l >= 0) {
+    n = V3(Real(lb.n[0][l]), Real(lb.n[1][l]), Real(lb.n[2][l]));
+    dlen = Real(lb.dlen[l]);
+  } else {
+    n = pair_cross(w, g);
+    const Real nn = n.norm();
+    if (nn > Real(1e-20))
+      n *= Real(cr.side) / nn;
+    else
+      n = V3(0, 0, Real(cr.side > 0 ? -1 : 1));
+    dlen = g.d.norm();
+  }
+  // d / |d| ((-d) / |d| is its negative exactly).
+  auto unit_d = [&] {
+    return l >= 0 ? V3(Real(lb.ud[0][l]), Real(lb.ud[1][l]), Real(lb.ud[2][l])) : V3(g.d * (Real(1) / dlen));
+  };
+  const Real D = Real(cr.contact_distance);
+  Real delta;
+  V3 u;
+  if (g.d.dot(n) >= Real(0)) {
+    delta = D - g.dist;
+    u = dlen > Real(1e-12) * D ? unit_d() : n;
+  } else {
+    if (g.dist > D && cr_gap_[c] > 0) {
+      // On the "wrong" side by more than D, but apart (|d| > D) at the end of the last
+      // step too: the yarns never came within D of each other, so they did not pass
+      // through each other (that takes far less than D of relative motion per step); the
+      // side test flipped because a tracked segment turned over (flung ends after
+      // perforation). There is no contact to keep: released quietly.
+      release(c, ev_separated);
+      return false;
+    }
+    if (g.dist > D) {
+      // Passed through by more than a yarn diameter: a correction of more than 2D in one
+      // step; the nearest-pair assumption is broken here.
+      release(c, ev_pass);
+      return false;
+    }
+    delta = D + g.dist;
+    u = dlen > Real(1e-12) * D ? V3(-unit_d()) : n;
+  }
+  // A crossing on a symmetry plane is its own mirror image: its mirror contact pair ties
+  // with this one, and the pair's mean direction has no component across the plane.
+  if ((model_.mirror_x && cr.grid_i == 0) || (model_.mirror_y && cr.grid_j == 0)) {
+    if (model_.mirror_x && cr.grid_i == 0) u.x() = 0;
+    if (model_.mirror_y && cr.grid_j == 0) u.y() = 0;
+    const Real un = u.norm();
+    u = un > Real(0) ? V3(u / un) : n;
+  }
+  // Effective inverse mass of the relative motion of the two contact points.
+  // A node the projectile holds does not yield into it (see release_held).
+  // Where the projectile holds both yarns so that they could only separate into it, the
+  // rigid body cannot resolve the contact: the yarn contact then moves them as before.
+  Real winv = 0, winv_free = 0;
+  for (int k = 0; k < 6; ++k) {
+    const int i = r.node[k];
+    if (i < 0) continue;
+    const Real wi = r.w[k] * r.w[k] * Real(model_.inv_mass[i]);
+    winv_free += wi;
+    if (!held_flag_[i]) {
+      winv += wi;  // free = 1 exactly
+      continue;
+    }
+    r.any_held = true;
+    const Real un = u.dot(held_n_[i]);
+    const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
+    winv += wi * free;
+  }
+  r.hold = winv >= Real(kMinHeldMobility) * winv_free;
+  if (!r.hold) winv = winv_free;
+  if (winv <= Real(0)) return false;  // every node clamped
+  // Transverse compression (docs/MODEL.md §4): between the rest distance D and the
+  // flattened distance c_min the crossing is a compliant contact; below c_min it is the
+  // paper's rigid one. Rigid crossings have c_min = D, and everything below is as before.
+  const Real span = compressible_ ? D - Real(cr.flattened_distance) : Real(0);  // compressible distance D - c_min
+  const Real floor_pen = delta - span;                                          // penetration below c_min
+  const bool compliant = span > Real(0) && delta > Real(0);
+  // With the split, the approach speed of the two contact points along u bounds the
+  // velocity change a correction may make (see below).
+  Real approach = 0;
+  if (model_.split_penetration && (floor_pen > Real(0) || compliant)) {
+    Real vrel = 0;
+    for (int k = 0; k < 6; ++k)
+      if (r.node[k] >= 0) vrel += r.w[k] * v_[r.node[k]].dot(u);
+    approach = std::max(Real(0), -vrel);
+  }
+  Real P = 0;
+  if (floor_pen > Real(0)) {
+    // Eq 9-10 with node masses: a relative displacement alpha * floor_pen within the step.
+    Real dv = floor_pen / dt;
+    if (model_.split_penetration) {
+      // Only the part of the penetration this step's approach made is removed by a velocity
+      // change (which then leaves the contact at rest: inelastic, as in the paper);
+      // penetration already there before the step is removed by moving the nodes, so no
+      // separating velocity (energy) is injected. See docs/MODEL.md.
+      dv = std::min(dv, approach);
+      approach -= dv;
+      const Real shift = floor_pen - dv * dt;
+      if (shift > Real(0)) {
+        // A compressible crossing's shift is capped (compressed_shift), but never so far that
+        // more than kFloorLeft c_min of closure below the floor is left: the cap paces the
+        // removal of closure, it must not let the yarns pass through each other.
+        const Real left = Real(kFloorLeft) * Real(cr.flattened_distance);
+        r.S = (alpha * (span > Real(0) ? std::max(compressed_shift(shift, D), shift - left) : shift) / winv) * u;
+        r.has_s = true;
+      }
+    }
+    P = alpha * dv / winv;
+    r.P = P * u;
+    r.has_n = P > Real(0);
+  }
+  if (compliant) compress(c, alpha, last, std::min(span, span - delta), span, winv, P, approach, u, r);
+  cr_fn_step_[c] += double(P / dt);  // Eq 11
+  if (last) cr_gap_[c] = double(g.dist - D);
+  return true;
+}
+
+// The compliant part of a crossing's normal contact: c(f) = c_min + span / (1 + f / F_half)
+// taken implicitly, at the end of the correction. With s the distance above c_min, q the
+// relative displacement the impulse makes (q = kap (f - f_acc), kap = dt^2 winv) and f_acc the
+// normal force the crossing has already had this step:
+//   f_acc + (s - s_p) / kap = F_half (span / s - 1)
+//   s^2 + (kap (f_acc + F_half) - s_p) s - kap F_half span = 0,
+// whose positive root is taken. An implicit update is stable at any stiffness: as f grows
+// the law stiffens without bound (c -> c_min), and the explicit force of a prototype
+// chattered there. It dissipates (like the rigid correction it becomes at high force):
+// the work the impulse takes beyond the law's stored energy is booked as compression_loss.
+// s_p: distance above c_min after the rigid part (>= 0); P: the rigid part's impulse.
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p, Real span, Real winv, Real P,
+                                          Real approach, const V3& u, CrossingImpulse& r) {
+  const Crossing& cr = model_.crossings[c];
+  const double dt = model_.dt;
+  const double kap = dt * dt * double(winv), Fh = cr.compression_force;
+  const double f_acc = cr_fn_step_[c] + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
+  const double b = kap * (f_acc + Fh) - sp, k4 = 4 * kap * Fh * sz;
+  const double root = std::sqrt(b * b + k4);
+  double s = b > 0 ? 0.5 * k4 / (b + root) : 0.5 * (root - b);  // the positive root, without cancellation
+  double q = s - sp, qv = q;
+  // The force may exceed last step's only by what stops this step's approach (the rigid
+  // contact's force): a crossing loads at the pace its yarns press, and unloads elastically.
+  // A closure beyond that was there before the step (a yarn end snapping in, a tracking
+  // move, a neighbour's shift): as with rigid contact, it is removed by moving the nodes,
+  // with the force capped and the distance the law's at that force.
+  const double qv_max = kap * (cr_fn_[c] + double(approach) / (dt * double(winv)) - f_acc);
+  if (model_.split_penetration && q > std::max(0.0, qv_max)) {
+    qv = std::max(0.0, qv_max);
+    s = Fh * sz / (f_acc + qv / kap + Fh);
+    q = s - sp;
+    const V3 S = (alpha * Real(compressed_shift(Real(q - qv), Real(cr.contact_distance))) / Real(winv)) * u;
+    r.S = r.has_s ? V3(r.S + S) : S;
+    r.has_s = true;
+  }
+  if (q > 0) {
+    q *= double(alpha);
+    const Real Pc = Real(double(alpha) * qv / (dt * double(winv)));
+    r.C = Pc * u;
+    r.has_c = Pc > Real(0);
+    cr_fn_step_[c] += double(Pc) / dt;
+  } else {
+    q = 0;
+  }
+  if (last) {
+    // The law's stored energy at the distance this crossing now enforces:
+    // integral of F_half (span / x - 1) dx from s to span.
+    const double se = std::min(sz, sp + q);
+    cr_u_[c] = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
+  }
+}
+
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::friction_setup(int c, const Window& w, const ContactGeom& g,
+                                                const lanes::ClosestBatch& lb, CrossingImpulse& r, FrictionSetup& s) {
+  const Crossing& cr = model_.crossings[c];
+  const int kw = w.kw, kf = w.kf;
+  if (const int l = g.lane; l >= 0) {
+    // The lanes did chord_coord for this crossing (all four window segments intact).
+    s.cw = kw + double(lb.offw[l]);
+    s.cf = kf + double(lb.offf[l]);
+    s.Tw = V3(Real(lb.tw[0][l]), Real(lb.tw[1][l]), Real(lb.tw[2][l]));
+    s.Tf = V3(Real(lb.tf[0][l]), Real(lb.tf[1][l]), Real(lb.tf[2][l]));
+    s.lw.first = kw - 1;
+    s.lf.first = kf - 1;
+    for (int k = 0; k < 2; ++k) s.lw.len[k] = Real(lb.lw[k][l]), s.lf.len[k] = Real(lb.lf[k][l]);
+  } else {
+    V3 pa = V3::Zero(), pb = V3::Zero();
+    for (int k = 0; k < 3; ++k) {
+      if (r.node[k] >= 0) pa -= r.w[k] * w.xw[k];
+      if (r.node[3 + k] >= 0) pb += r.w[3 + k] * w.xf[k];
+    }
+    s.cw = chord_coord(cr.warp_yarn, kw, w.xw, w.wseg, pb, s.Tw);
+    s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
+    s.lw = s.lf = KnownLengths{};
+  }
+  if (cr_stick_w_[c] < 0) cr_stick_w_[c] = s.cw, cr_stick_f_[c] = s.cf;
+  Real fa, fb;
+  coord_nodes(cr.warp_yarn, s.cw, r.fnode[0], r.fnode[1], fa);
+  coord_nodes(cr.weft_yarn, s.cf, r.fnode[2], r.fnode[3], fb);
+  r.fw[0] = -(Real(1) - fa);
+  r.fw[1] = -fa;
+  r.fw[2] = Real(1) - fb;
+  r.fw[3] = fb;
+  s.fwinv = 0;
+  for (int k = 0; k < 4; ++k) s.fwinv += double(r.fw[k] * r.fw[k]) * model_.inv_mass[r.fnode[k]];
+}
+
+// Stick or slip on each yarn, and the friction impulse of one pass (Eq 12-15).
+template <class Real>
+RAVEL_INLINE void SolverT<Real>::pass_friction(int c, Real alpha, bool last, const FrictionSetup& s,
+                                               CrossingImpulse& r) {
+  const Crossing& cr = model_.crossings[c];
+  const Real dt = Real(model_.dt);
+  const double fwinv = s.fwinv;
+  const double fn = cr_fn_step_[c];
+  const double limit = model_.friction * fn;
+  double ft_w = 0, ft_f = 0, moved = 0, stored = 0;
+  bool slid = false;
+  if (fwinv > 0) {
+    // K = alpha_f m / dt^2, m the effective mass of the relative motion: alpha_f = 1
+    // returns the contact to its stuck point in exactly one step.
+    const double K = model_.friction_penalty / (fwinv * double(dt) * double(dt));
+    auto one_yarn = [&](int yarn, double cur, double& stick, double& force, const KnownLengths& known) {
+      const double slip = double(arc_between(yarn, stick, cur, known));  // Delta s of Eq 12
+      const double trial = K * slip;
+      if (std::abs(trial) <= limit) {
+        force = trial;  // stick: A' stays the stuck point (Eq 13, phi <= 0)
+      } else {
+        force = std::copysign(limit, trial);  // slip: Eq 14 moves the stuck point
+        const double new_stick = advance(yarn, cur, -force / K, known);
+        moved += std::abs(double(arc_between(yarn, stick, new_stick, known)));
+        stick = new_stick;
+        slid = true;
+      }
+      stored += force * force / (2 * K);  // the penalty spring K/2 e^2 (stick_energy)
+    };
+    one_yarn(cr.warp_yarn, s.cw, cr_stick_w_[c], ft_w, s.lw);
+    one_yarn(cr.weft_yarn, s.cf, cr_stick_f_[c], ft_f, s.lf);
+  }
+  if (ft_w != 0 || ft_f != 0) {
+    // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
+    const V3 Fwarp = Real(ft_w) * s.Tw - Real(ft_f) * s.Tf;
+    r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
+    r.has_f = true;
+    cr_ft_[c] = double(Fwarp.norm());
+  }
+  if (last) {
+    cr_sliding_[c] = slid;
+    cr_slip_[c] = moved / double(dt);
+    cr_fn_[c] = fn;
+    cr_stick_e_[c] = stored;
+  }
+}
+
+// The interpenetration left at the end of a step (after every correction), sampled every
+// kPenetrationCheckEvery steps: what the contact algorithm failed to resolve.
+template <class Real>
+void SolverT<Real>::residual_penetration() {
+  const int nc = int(model_.crossings.size());
+  const int nb = (nc + kBatch - 1) / kBatch;
+  double worst = 0;
+#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : worst) if (threads_ > 1)
+  for (int b = 0; b < nb; ++b) {
+    const int c0 = b * kBatch, c1 = std::min(nc, c0 + kBatch);
+    Window w[kBatch];
+    ContactGeom g[kBatch];
+    bool on[kBatch];
+    for (int c = c0; c < c1; ++c) {
+      on[c - c0] = cr_active_[c];
+      if (on[c - c0]) load_window(c, w[c - c0]);
+    }
+    lanes::ClosestBatch lb;
+    closest_batch(c0, c1, on, w, g, lb);
+    for (int c = c0; c < c1; ++c) {
+      const int k = c - c0;
+      if (!on[k] || !g[k].ok) continue;
+      const Crossing& cr = model_.crossings[c];
+      const V3 n = Real(cr.side) * pair_cross(w[k], g[k]);
+      // Below the flattened distance (D itself for rigid crossings): what the law forbids.
+      const double D = cr.contact_distance, cmin = compressible_ ? cr.flattened_distance : D;
+      const double dist = double(g[k].dist);
+      const double pen = g[k].d.dot(n) >= Real(0) ? cmin - dist : (dist > D ? 0.0 : cmin + dist);
+      worst = std::max(worst, pen);
+    }
+  }
+  diag_.max_penetration = std::max(diag_.max_penetration, worst);
+}
+
+// The two precisions (solver.h: Precision).
+template void SolverT<float>::yarn_contact();
+template void SolverT<double>::yarn_contact();
+template void SolverT<float>::residual_penetration();
+template void SolverT<double>::residual_penetration();
+
+}  // namespace ravel::detail
