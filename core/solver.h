@@ -65,6 +65,47 @@ struct ContactDiagnostics {
   double balance_drift_time = -1;
 };
 
+// The precision-independent part of a run's dynamic state, as plain data (the solver's arrays
+// are in core/solver/state.h): time, step count, the ledger, diagnostics, the fault that
+// stopped the run, the last step's scalars and the projectile's contact history.
+struct RunState {
+  double time = 0;
+  long steps = 0;
+  Ledger ledger;  // at the latest half step (time - dt/2)
+  ContactDiagnostics diag;
+  std::string divergence, divergence_cause;  // empty: running
+  long divergence_step = -1;
+  double divergence_time = -1;
+  int nodes_on_projectile = 0;
+  double projectile_force = 0, yarn_force = 0, max_strain = 0;  // N, N, -
+  int sliding_count = 0, stuck_count = 0;
+  int broken[2] = {0, 0};  // elements broken so far, per family
+  bool had_contact = false;
+  double last_contact_time = -1;
+
+  template <class Ar>
+  void io(Ar& ar) {
+    ar.mark(0x52564231);  // "RVB1"
+    ar.pod(time);
+    ar.pod(steps);
+    ar.pod(ledger);
+    ar.pod(diag);
+    ar.str(divergence);
+    ar.str(divergence_cause);
+    ar.pod(divergence_step);
+    ar.pod(divergence_time);
+    ar.pod(nodes_on_projectile);
+    ar.pod(projectile_force);
+    ar.pod(yarn_force);
+    ar.pod(max_strain);
+    ar.pod(sliding_count);
+    ar.pod(stuck_count);
+    ar.pod(broken);
+    ar.pod(had_contact);
+    ar.pod(last_contact_time);
+  }
+};
+
 // Precision-independent view of a solver (the Simulation holds one of two instantiations).
 class Solver {
  public:
@@ -79,19 +120,19 @@ class Solver {
   virtual void set_simd(bool on) = 0;
   virtual bool simd_active() const = 0;
 
-  double time() const { return time_; }
-  long steps() const { return steps_; }
+  double time() const { return run_.time; }
+  long steps() const { return run_.steps; }
   // Ledger of the modelled part at the latest half step (time() - dt/2).
-  const Ledger& ledger() const { return ledger_; }
-  double ledger_time() const { return time_ - 0.5 * model_.dt; }
-  const ContactDiagnostics& diagnostics() const { return diag_; }
-  bool diverged() const { return !divergence_.empty(); }
-  const std::string& divergence() const { return divergence_; }
+  const Ledger& ledger() const { return run_.ledger; }
+  double ledger_time() const { return run_.time - 0.5 * model_.dt; }
+  const ContactDiagnostics& diagnostics() const { return run_.diag; }
+  bool diverged() const { return !run_.divergence.empty(); }
+  const std::string& divergence() const { return run_.divergence; }
   // The fault that stopped the run: cause ("non_finite", "energy_balance", "node_escaped"),
   // the step it happened in (steps completed before it) and the time then.
-  const std::string& divergence_cause() const { return divergence_cause_; }
-  long divergence_step() const { return divergence_step_; }
-  double divergence_time() const { return divergence_time_; }
+  const std::string& divergence_cause() const { return run_.divergence_cause; }
+  long divergence_step() const { return run_.divergence_step; }
+  double divergence_time() const { return run_.divergence_time; }
 
   // Projectile state (modelled part; mass is projectile_mass).
   virtual Vec3d projectile_position() const = 0;
@@ -121,13 +162,13 @@ class Solver {
   virtual int crossing_weft_node(int c) const = 0;
 
   // Per step scalars.
-  int nodes_on_projectile() const { return nodes_on_projectile_; }
-  double projectile_contact_force() const { return projectile_force_; }  // N, modelled part
-  double yarn_contact_force() const { return yarn_force_; }              // N, modelled part
-  double max_strain() const { return max_strain_; }
-  int sliding_crossings() const { return sliding_count_; }
-  int stuck_crossings() const { return stuck_count_; }
-  int broken_count(int family) const { return broken_[family]; }
+  int nodes_on_projectile() const { return run_.nodes_on_projectile; }
+  double projectile_contact_force() const { return run_.projectile_force; }  // N, modelled part
+  double yarn_contact_force() const { return run_.yarn_force; }              // N, modelled part
+  double max_strain() const { return run_.max_strain; }
+  int sliding_crossings() const { return run_.sliding_count; }
+  int stuck_crossings() const { return run_.stuck_count; }
+  int broken_count(int family) const { return run_.broken[family]; }
   std::uint64_t state_hash() const;
   // The dynamic state, for checkpoints (core/state_io.h): everything a step carries to the
   // next. load_state reads it into a solver built from the same model (the caller checks).
@@ -135,8 +176,8 @@ class Solver {
   virtual void load_state(StateReader& r) = 0;
 
   // Projectile contact history, for perforation detection.
-  bool had_contact() const { return had_contact_; }
-  double last_contact_time() const { return last_contact_time_; }
+  bool had_contact() const { return run_.had_contact; }
+  double last_contact_time() const { return run_.last_contact_time; }
   // Stop the run: the method broke (cause: a short tag, why: the sentence after "diverged at
   // step N (t = T us): "). The solver's own checks call it (core/solver/faults.cpp), and so does
   // Simulation for the faults it judges against the scene. Only the first fault is kept.
@@ -150,40 +191,11 @@ class Solver {
   // The base class's part of the state.
   template <class Ar>
   void base_io(Ar& ar) {
-    ar.mark(0x52564231);  // "RVB1"
-    ar.pod(time_);
-    ar.pod(steps_);
-    ar.pod(ledger_);
-    ar.pod(diag_);
-    ar.str(divergence_);
-    ar.str(divergence_cause_);
-    ar.pod(divergence_step_);
-    ar.pod(divergence_time_);
-    ar.pod(nodes_on_projectile_);
-    ar.pod(projectile_force_);
-    ar.pod(yarn_force_);
-    ar.pod(max_strain_);
-    ar.pod(sliding_count_);
-    ar.pod(stuck_count_);
-    ar.pod(broken_);
-    ar.pod(had_contact_);
-    ar.pod(last_contact_time_);
+    run_.io(ar);
   }
 
   Model model_;
-  double time_ = 0;
-  long steps_ = 0;
-  Ledger ledger_;
-  ContactDiagnostics diag_;
-  std::string divergence_, divergence_cause_;
-  long divergence_step_ = -1;
-  double divergence_time_ = -1;
-  int nodes_on_projectile_ = 0;
-  double projectile_force_ = 0, yarn_force_ = 0, max_strain_ = 0;
-  int sliding_count_ = 0, stuck_count_ = 0;
-  int broken_[2] = {0, 0};
-  bool had_contact_ = false;
-  double last_contact_time_ = -1;
+  RunState run_;
   double max_balance_error_ = 0.05;
 };
 

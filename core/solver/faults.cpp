@@ -17,11 +17,12 @@ std::string fmt_g(double v) {
 }  // namespace
 
 void Solver::fault(const std::string& cause, const std::string& why) {
-  if (!divergence_.empty()) return;  // the first fault is the one that stopped the run
-  divergence_ = "diverged at step " + std::to_string(steps_) + " (t = " + fmt_g(time_ * 1e6) + " us): " + why;
-  divergence_cause_ = cause;
-  divergence_step_ = steps_;
-  divergence_time_ = time_;
+  if (!run_.divergence.empty()) return;  // the first fault is the one that stopped the run
+  run_.divergence =
+      "diverged at step " + std::to_string(run_.steps) + " (t = " + fmt_g(run_.time * 1e6) + " us): " + why;
+  run_.divergence_cause = cause;
+  run_.divergence_step = run_.steps;
+  run_.divergence_time = run_.time;
 }
 
 namespace detail {
@@ -40,11 +41,11 @@ void SolverT<Real>::check_balance(double total) {
     // run with hundreds of breaks at a coarse step (it vanishes as dt is lowered). The
     // first stops the run; the second is a warning until it reaches 4x the limit.
     const double err = std::abs(total - e0) / e0;
-    if (steps_ % kBalanceWindow == 0) {
-      balance_window_[(steps_ / kBalanceWindow) % 8] = err;
+    if (run_.steps % kBalanceWindow == 0) {
+      s_.balance_window[(run_.steps / kBalanceWindow) % 8] = err;
     }
-    const double earlier = balance_window_[(steps_ / kBalanceWindow + 1) % 8];  // ~8 windows ago
-    const double recent = balance_window_[(steps_ / kBalanceWindow) % 8];       // this window's start
+    const double earlier = s_.balance_window[(run_.steps / kBalanceWindow + 1) % 8];  // ~8 windows ago
+    const double recent = s_.balance_window[(run_.steps / kBalanceWindow) % 8];       // this window's start
     // Half the limit gained within one window (64 steps) is an instability even below the
     // limit itself: a mode growing that fast breaks the yarns it runs in before the ledger
     // reaches the limit (a pin-jointed patch at dt_factor 2 tore apart in 32 steps with 4.4 %
@@ -56,9 +57,9 @@ void SolverT<Real>::check_balance(double total) {
         fault("energy_balance", "the energy ledger is off by " + fmt_g(100 * (total - e0) / e0) +
                                     " % of the impact energy (energy " + (total > e0 ? "created" : "lost") +
                                     " without a mechanism): the explicit integration is unstable");
-      } else if (!diag_.balance_drift) {
-        diag_.balance_drift = true;
-        diag_.balance_drift_time = time_;
+      } else if (!run_.diag.balance_drift) {
+        run_.diag.balance_drift = true;
+        run_.diag.balance_drift_time = run_.time;
       }
     }
   }
@@ -78,13 +79,13 @@ void SolverT<Real>::check_positions(double max_r2) {
 // within one time step).
 template <class Real>
 void SolverT<Real>::check_projectile() {
-  const double r = double(xp_.norm());
+  const double r = double(s_.xp.norm());
   if (!std::isfinite(r)) {
     fault("non_finite", "the projectile's position became NaN/infinite");
   } else if (r > 10 * (model_.half_width + model_.half_length) + 1) {
     fault("projectile_left_domain",
           std::string("the projectile left the domain (more than 10 fabric sizes from the centre) without ") +
-              (had_contact_ ? "perforating" : "touching the fabric: it crossed the fabric within one time step"));
+              (run_.had_contact ? "perforating" : "touching the fabric: it crossed the fabric within one time step"));
   }
 }
 

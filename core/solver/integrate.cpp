@@ -13,25 +13,25 @@ void SolverT<Real>::integrate() {
 
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : maxr2) if (threads_ > 1)
   for (int i = 0; i < n; ++i) {
-    v_prev_[i] = v_[i];
-    dx_contact_[i].setZero();
+    s_.v_prev[i] = s_.v[i];
+    s_.dx_contact[i].setZero();
     const std::uint8_t fx = model_.fixed[i];
     if (fx == fix_all) continue;
-    V3 v = v_[i] + (dt * Real(model_.inv_mass[i])) * f_[i];
+    V3 v = s_.v[i] + (dt * Real(model_.inv_mass[i])) * s_.f[i];
     if (fx) zero_fixed(v, fx);
-    v_[i] = v;
-    x_[i] += dt * v;
-    maxr2 = std::max(maxr2, double(x_[i].squaredNorm()));
+    s_.v[i] = v;
+    s_.x[i] += dt * v;
+    maxr2 = std::max(maxr2, double(s_.x[i].squaredNorm()));
   }
   // External loads (rare: tests and pull-out): applied after the free update.
-  for (const auto& [i, F] : f_ext_) {
+  for (const auto& [i, F] : s_.f_ext) {
     if (model_.fixed[i] == fix_all) continue;
     V3 dv = (dt * Real(model_.inv_mass[i])) * F;
     zero_fixed(dv, model_.fixed[i]);
-    v_[i] += dv;
-    x_[i] += dt * dv;
+    s_.v[i] += dv;
+    s_.x[i] += dt * dv;
   }
-  xp_ += dt * vp_;
+  s_.xp += dt * s_.vp;
   check_positions(maxr2);
 }
 

@@ -8,11 +8,11 @@ namespace ravel::detail {
 template <class Real>
 inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail, bool breakable, double& stored,
                                        double& diss, double& released, double& max_strain, double& damp) {
-  if (broken_flag_[e]) {
-    elem_force_[e].setZero();
+  if (s_.broken_flag[e]) {
+    s_.elem_force[e].setZero();
     return false;
   }
-  const V3 dx = x_[model_.elem_b[e]] - x_[model_.elem_a[e]];
+  const V3 dx = s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]];
   const Real len = dx.norm();
   const double rest = model_.elem_rest[e];
   Real eps = len / Real(rest) - Real(1);
@@ -23,11 +23,11 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   Real mat = eps, dg = Real(1);
   const double apparent = double(eps);  // against L0 (crimp_stage turns eps into the yarn's own strain)
   if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
-  const double mat_prev = double(prev_strain_[e]);
+  const double mat_prev = double(s_.prev_strain[e]);
   double sig, u, dd = 0;
   if (zener) {
-    const ZenerStep zs = zener_.step(double(prev_strain_[e]), double(mat), double(ev_[e]));
-    ev_[e] = Real(zs.ev);
+    const ZenerStep zs = zener_.step(double(s_.prev_strain[e]), double(mat), double(s_.ev[e]));
+    s_.ev[e] = Real(zs.ev);
     sig = zs.stress;
     u = zener_stored(zener_.c, sig, zs.ev) * vol;
     dd = zs.dissipated * vol;
@@ -39,7 +39,7 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   // taut its stress gains beta E_inst times its strain rate, never below zero; the work is
   // booked as damping_J. Elements that stay taut (the waves) are not damped.
   double sig_total = sig;
-  if (sig > 0 && damping_k_ > 0 && stress_[e] == Real(0)) {
+  if (sig > 0 && damping_k_ > 0 && s_.stress[e] == Real(0)) {
     const double de = double(mat) - mat_prev;
     sig_total = std::max(0.0, sig + damping_k_ * de * zener_.inv_dt);
     damp += (sig_total - sig) * de * vol;
@@ -52,19 +52,19 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   // the end-of-step stress alone made the ledger error first order in dt).
   double sig_force = sig_total * double(dg);
   if (crimp_damping_k_ > 0) {
-    // strain_[e] still holds last step's own strain: its apparent strain a step ago.
-    const double de = apparent - ((1 + double(strain_[e])) * (1 + model_.crimp_strain) - 1);
+    // s_.strain[e] still holds last step's own strain: its apparent strain a step ago.
+    const double de = apparent - ((1 + double(s_.strain[e])) * (1 + model_.crimp_strain) - 1);
     double extra = 0;
     if (sig > 0) {
       const double f = std::max(0.0, sig_force + crimp_damping_k_ * de * zener_.inv_dt);
       extra = f - sig_force;
       sig_force = f;
     }
-    damp += 0.5 * (double(crimp_damp_stress_[e]) + extra) * de * vol;
-    crimp_damp_stress_[e] = Real(extra);
+    damp += 0.5 * (double(s_.crimp_damp_stress[e]) + extra) * de * vol;
+    s_.crimp_damp_stress[e] = Real(extra);
   }
-  prev_strain_[e] = mat;
-  strain_[e] = eps;
+  s_.prev_strain[e] = mat;
+  s_.strain[e] = eps;
   diss += dd;
   if (breakable && double(eps) >= fail) {
     // Failure: the element is removed for good, its energy is released (SPEC §1). It
@@ -76,19 +76,19 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
     // element stretched past failure within one step, the quadratic energy of a stretch it
     // never resisted (20 % of the impact energy created over 4 ms of a slowly caught
     // projectile at 73 m/s).
-    broken_flag_[e] = 1;
-    released += elem_energy_[e] + 0.5 * double(stress_[e]) * vol * (double(mat) - mat_prev);
-    stress_[e] = 0;
-    if (crimp_damping_k_ > 0) crimp_damp_stress_[e] = 0;
-    elem_force_[e].setZero();
+    s_.broken_flag[e] = 1;
+    released += s_.elem_energy[e] + 0.5 * double(s_.stress[e]) * vol * (double(mat) - mat_prev);
+    s_.stress[e] = 0;
+    if (crimp_damping_k_ > 0) s_.crimp_damp_stress[e] = 0;
+    s_.elem_force[e].setZero();
     return true;
   }
-  elem_energy_[e] = u;
+  s_.elem_energy[e] = u;
   stored += u;
-  stress_[e] = Real(sig_total);
+  s_.stress[e] = Real(sig_total);
   max_strain = std::max(max_strain, double(eps));
   // Force on node b: -sigma A along the element (pulls b towards a).
-  elem_force_[e] = len > Real(0) ? V3(dx * Real(-sig_force * model_.elem_area[e] / double(len))) : V3::Zero();
+  s_.elem_force[e] = len > Real(0) ? V3(dx * Real(-sig_force * model_.elem_area[e] / double(len))) : V3::Zero();
   return false;
 }
 
@@ -115,10 +115,10 @@ void SolverT<Real>::internal_forces() {
     const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
     if constexpr (std::is_same_v<Real, double>) {
       bool intact = use_lanes && e1 - e0 == kBatch;
-      for (int e = e0; e < e1 && intact; ++e) intact = !broken_flag_[e];
+      for (int e = e0; e < e1 && intact; ++e) intact = !s_.broken_flag[e];
       if (intact) {
         lanes::ElementBatch b;
-        b.x = x_[0].data();
+        b.x = s_.x[0].data();
         b.a = &model_.elem_a[e0];
         b.b = &model_.elem_b[e0];
         b.rest = &model_.elem_rest[e0];
@@ -129,12 +129,12 @@ void SolverT<Real>::internal_forces() {
         b.fail = fail;
         b.breakable = breakable;
         b.damping_k = damping_k_;
-        b.prev_strain = &prev_strain_[e0];
-        b.ev = &ev_[e0];
-        b.strain = &strain_[e0];
-        b.stress = &stress_[e0];
-        b.energy = &elem_energy_[e0];
-        b.force = elem_force_[e0].data();
+        b.prev_strain = &s_.prev_strain[e0];
+        b.ev = &s_.ev[e0];
+        b.strain = &s_.strain[e0];
+        b.stress = &s_.stress[e0];
+        b.energy = &s_.elem_energy[e0];
+        b.force = s_.elem_force[e0].data();
         if (lanes::zener4(b)) {
           for (int l = 0; l < kBatch; ++l) {
             diss += b.dd[l];
@@ -151,43 +151,43 @@ void SolverT<Real>::internal_forces() {
   }
   // Count failures serially to keep the count per family (only in a step with one).
   for (int e = 0; e < ne && nbroke > 0; ++e) {
-    if (broken_flag_[e] == 1) {
-      broken_flag_[e] = 2;
+    if (s_.broken_flag[e] == 1) {
+      s_.broken_flag[e] = 2;
       newly_broken[model_.yarn_family[model_.elem_yarn[e]]]++;
     }
   }
-  broken_[0] += newly_broken[0];
-  broken_[1] += newly_broken[1];
+  run_.broken[0] += newly_broken[0];
+  run_.broken[1] += newly_broken[1];
   // Bending: compression-only springs between midpoints of adjoining elements.
   const int nbend = int(model_.bend_k.size());
   double bend_stored = 0;
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : bend_stored) if (threads_ > 1)
   for (int s = 0; s < nbend; ++s) {
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
-    if (broken_flag_[e1] || broken_flag_[e2]) {
-      bend_force_[s].setZero();
+    if (s_.broken_flag[e1] || s_.broken_flag[e2]) {
+      s_.bend_force[s].setZero();
       continue;
     }
     const int ax = model_.bend_mirror[s];
     if (ax >= 0) {
       // Against the mirror image: midpoint distance 2 |M_ax|; pushes M away from the
       // plane. Half of the spring's energy belongs to this side of the plane.
-      const Real mc = Real(0.5) * (x_[model_.elem_a[e1]][ax] + x_[model_.elem_b[e1]][ax]);
+      const Real mc = Real(0.5) * (s_.x[model_.elem_a[e1]][ax] + s_.x[model_.elem_b[e1]][ax]);
       const double comp = model_.bend_rest[s] - 2 * std::abs(double(mc));
-      bend_force_[s].setZero();
+      s_.bend_force[s].setZero();
       if (comp > 0) {
         bend_stored += 0.25 * model_.bend_k[s] * comp * comp;
-        bend_force_[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
+        s_.bend_force[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
       }
       continue;
     }
-    const V3 m1 = Real(0.5) * (x_[model_.elem_a[e1]] + x_[model_.elem_b[e1]]);
-    const V3 m2 = Real(0.5) * (x_[model_.elem_a[e2]] + x_[model_.elem_b[e2]]);
+    const V3 m1 = Real(0.5) * (s_.x[model_.elem_a[e1]] + s_.x[model_.elem_b[e1]]);
+    const V3 m2 = Real(0.5) * (s_.x[model_.elem_a[e2]] + s_.x[model_.elem_b[e2]]);
     const V3 d = m2 - m1;
     const Real len = d.norm();
     const double r = model_.bend_rest[s], k = model_.bend_k[s], sl = double(len);
     if (sl >= r) {
-      bend_force_[s].setZero();
+      s_.bend_force[s].setZero();
       continue;
     }
     // Compression-only spring 1/2 k (r - s)^2, pushing midpoint 2 away from 1. Below
@@ -196,10 +196,10 @@ void SolverT<Real>::internal_forces() {
     // the cone of 1/2 k (r - s)^2 would flip direction from one step to the next.
     if (sl >= 0.5 * r) {
       bend_stored += 0.5 * k * (r - sl) * (r - sl);
-      bend_force_[s] = d * Real(k * (r - sl) / sl);
+      s_.bend_force[s] = d * Real(k * (r - sl) / sl);
     } else {
       bend_stored += 0.25 * k * r * r - 0.5 * k * sl * sl;
-      bend_force_[s] = d * Real(k);
+      s_.bend_force[s] = d * Real(k);
     }
   }
   // Gather.
@@ -207,15 +207,15 @@ void SolverT<Real>::internal_forces() {
 #pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
   for (int i = 0; i < n; ++i) {
     V3 f = V3::Zero();
-    for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) f += inc_e_[k].second * elem_force_[inc_e_[k].first];
-    for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * bend_force_[inc_b_[k].first];
-    f_[i] = f;
+    for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) f += inc_e_[k].second * s_.elem_force[inc_e_[k].first];
+    for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * s_.bend_force[inc_b_[k].first];
+    s_.f[i] = f;
   }
-  stored_now_ = stored + bend_stored;
-  damping_cum_ += damp;
-  viscous_cum_ += diss;
-  released_cum_ += released;
-  max_strain_ = max_strain;
+  s_.stored_now = stored + bend_stored;
+  s_.damping_cum += damp;
+  s_.viscous_cum += diss;
+  s_.released_cum += released;
+  run_.max_strain = max_strain;
 }
 
 // The two precisions (solver.h: Precision).

@@ -7,44 +7,44 @@ namespace ravel::detail {
 // mean of stored / cumulative-dissipation values at t - dt and t.
 template <class Real>
 void SolverT<Real>::close_ledger_row() {
-  if (steps_ == 0) {
-    compress_prev_ = compress_end_;
-    stick_prev_ = stick_end_;
-    stored_prev_ = stored_now_;
-    viscous_prev_ = viscous_cum_;
-    released_prev_ = released_cum_;
+  if (run_.steps == 0) {
+    s_.compress_prev = s_.compress_end;
+    s_.stick_prev = s_.stick_end;
+    s_.stored_prev = s_.stored_now;
+    s_.viscous_prev = s_.viscous_cum;
+    s_.released_prev = s_.released_cum;
     return;
   }
-  Ledger& l = ledger_;
-  l.fabric_ke_J = ke_fabric_half_;
-  l.projectile_ke_J = ke_half_ - ke_fabric_half_;
-  l.strain_energy_J = 0.5 * (stored_prev_ + stored_now_);
-  l.viscous_J = 0.5 * (viscous_prev_ + viscous_cum_);
-  l.damping_J = damping_cum_;
-  l.released_J = 0.5 * (released_prev_ + released_cum_);
+  Ledger& l = run_.ledger;
+  l.fabric_ke_J = s_.ke_fabric_half;
+  l.projectile_ke_J = s_.ke_half - s_.ke_fabric_half;
+  l.strain_energy_J = 0.5 * (s_.stored_prev + s_.stored_now);
+  l.viscous_J = 0.5 * (s_.viscous_prev + s_.viscous_cum);
+  l.damping_J = s_.damping_cum;
+  l.released_J = 0.5 * (s_.released_prev + s_.released_cum);
   // Dissipated by friction: the work its impulses took from the yarns (and the projectile)
   // less what the stick penalty springs hold (Eq 12: a stuck contact stores K/2 e^2 and
   // gives it back; only the rest is lost).
-  l.projectile_friction_J = pfriction_cum_;
-  l.contact_loss_J = contact_cum_;
-  l.shift_work_J = shift_cum_;
-  l.compression_J = 0.5 * (compress_prev_ + compress_end_);
-  l.stick_energy_J = 0.5 * (stick_prev_ + stick_end_);
-  l.friction_work_J = 0.0 - (friction_work_cum_ + l.stick_energy_J);  // (0.0 - : no negative zero)
-  l.compression_loss_J = -compress_work_cum_ - l.compression_J;
-  l.external_work_J = external_cum_;
-  stored_prev_ = stored_now_;
-  viscous_prev_ = viscous_cum_;
-  released_prev_ = released_cum_;
-  compress_prev_ = compress_end_;
-  stick_prev_ = stick_end_;
+  l.projectile_friction_J = s_.pfriction_cum;
+  l.contact_loss_J = s_.contact_cum;
+  l.shift_work_J = s_.shift_cum;
+  l.compression_J = 0.5 * (s_.compress_prev + s_.compress_end);
+  l.stick_energy_J = 0.5 * (s_.stick_prev + s_.stick_end);
+  l.friction_work_J = 0.0 - (s_.friction_work_cum + l.stick_energy_J);  // (0.0 - : no negative zero)
+  l.compression_loss_J = -s_.compress_work_cum - l.compression_J;
+  l.external_work_J = s_.external_cum;
+  s_.stored_prev = s_.stored_now;
+  s_.viscous_prev = s_.viscous_cum;
+  s_.released_prev = s_.released_cum;
+  s_.compress_prev = s_.compress_end;
+  s_.stick_prev = s_.stick_end;
   check_balance(l.total());
 }
 
 template <class Real>
 double SolverT<Real>::fabric_ke() const {
   double ke = 0;
-  for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(v_[i].squaredNorm());
+  for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(s_.v[i].squaredNorm());
   return ke;
 }
 
@@ -58,32 +58,32 @@ double SolverT<Real>::fabric_ke() const {
 // where whipping yarn ends were shifted tens of um per step at 200 m/s.)
 template <class Real>
 RAVEL_INLINE double SolverT<Real>::shift_energy() {
-  shifted_.clear();
+  s_.shifted.clear();
   for (int i = 0; i < model_.node_count; ++i)
-    if (dx_contact_[i].x() != Real(0) || dx_contact_[i].y() != Real(0) || dx_contact_[i].z() != Real(0))
-      shifted_.push_back(i);
-  if (shifted_.empty()) return 0;
-  if (elem_mark_.empty()) elem_mark_.assign(model_.element_count, 0), bend_mark_.assign(model_.bend_k.size(), 0);
-  if (++mark_ == 0) {  // wrapped: clear the marks
-    std::fill(elem_mark_.begin(), elem_mark_.end(), 0u);
-    std::fill(bend_mark_.begin(), bend_mark_.end(), 0u);
-    mark_ = 1;
+    if (s_.dx_contact[i].x() != Real(0) || s_.dx_contact[i].y() != Real(0) || s_.dx_contact[i].z() != Real(0))
+      s_.shifted.push_back(i);
+  if (s_.shifted.empty()) return 0;
+  if (s_.elem_mark.empty()) s_.elem_mark.assign(model_.element_count, 0), s_.bend_mark.assign(model_.bend_k.size(), 0);
+  if (++s_.mark == 0) {  // wrapped: clear the marks
+    std::fill(s_.elem_mark.begin(), s_.elem_mark.end(), 0u);
+    std::fill(s_.bend_mark.begin(), s_.bend_mark.end(), 0u);
+    s_.mark = 1;
   }
-  auto before = [&](int i) { return V3(x_[i] - dx_contact_[i]); };
+  auto before = [&](int i) { return V3(s_.x[i] - s_.dx_contact[i]); };
   double du = 0;
-  for (const int i : shifted_) {
+  for (const int i : s_.shifted) {
     for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) {
       const int e = inc_e_[k].first;
-      if (elem_mark_[e] == mark_ || broken_flag_[e]) continue;
-      elem_mark_[e] = mark_;
+      if (s_.elem_mark[e] == s_.mark || s_.broken_flag[e]) continue;
+      s_.elem_mark[e] = s_.mark;
       const int a = model_.elem_a[e], b = model_.elem_b[e];
-      du += element_energy_at(e, (x_[b] - x_[a]).norm()) - element_energy_at(e, (before(b) - before(a)).norm());
+      du += element_energy_at(e, (s_.x[b] - s_.x[a]).norm()) - element_energy_at(e, (before(b) - before(a)).norm());
     }
     for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) {
       const int sp = inc_b_[k].first;
-      if (bend_mark_[sp] == mark_) continue;
-      bend_mark_[sp] = mark_;
-      du += bend_energy_at(sp, [&](int n) { return x_[n]; }) - bend_energy_at(sp, before);
+      if (s_.bend_mark[sp] == s_.mark) continue;
+      s_.bend_mark[sp] = s_.mark;
+      du += bend_energy_at(sp, [&](int n) { return s_.x[n]; }) - bend_energy_at(sp, before);
     }
   }
   return du;
@@ -96,8 +96,8 @@ inline double SolverT<Real>::element_energy_at(int e, Real len) const {
   Real eps = len / Real(rest) - Real(1), mat = eps, dg = Real(1);
   if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
   if (model_.material == Material::zener) {
-    const double sig = std::max(0.0, zener_.c.k1 * (double(mat) - double(ev_[e])));
-    return zener_stored(zener_.c, sig, double(ev_[e])) * vol;
+    const double sig = std::max(0.0, zener_.c.k1 * (double(mat) - double(s_.ev[e])));
+    return zener_stored(zener_.c, sig, double(s_.ev[e])) * vol;
   }
   const double sig = std::max(0.0, model_.modulus_inst * double(mat));
   return sig * sig / (2 * model_.modulus_inst) * vol;
@@ -116,34 +116,35 @@ void SolverT<Real>::finish_step() {
 #pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (threads_ > 1)
   for (int i = 0; i < n; ++i) {
     const double hm = 0.5 * model_.mass[i];
-    ke += hm * double(v_[i].squaredNorm());
-    const V3 vsum = v_prev_[i] + v_[i];
-    w_contact += hm * double(dv_contact_[i].dot(vsum));
-    w_friction += hm * double(dv_friction_[i].dot(vsum));
-    dv_contact_[i].setZero();  // ready for the next step's corrections
-    dv_friction_[i].setZero();
+    ke += hm * double(s_.v[i].squaredNorm());
+    const V3 vsum = s_.v_prev[i] + s_.v[i];
+    w_contact += hm * double(s_.dv_contact[i].dot(vsum));
+    w_friction += hm * double(s_.dv_friction[i].dot(vsum));
+    s_.dv_contact[i].setZero();  // ready for the next step's corrections
+    s_.dv_friction[i].setZero();
     if (compressible_) {
-      w_compress += hm * double(dv_compress_[i].dot(vsum));
-      dv_compress_[i].setZero();
+      w_compress += hm * double(s_.dv_compress[i].dot(vsum));
+      s_.dv_compress[i].setZero();
     }
   }
   // The projectile's friction touched only the nodes on it (in node order).
-  for (int i : ptouch_list_) {
-    w_pfriction += 0.5 * model_.mass[i] * double(dv_pfriction_[i].dot(v_prev_[i] + v_[i]));
-    dv_pfriction_[i].setZero();
+  for (int i : s_.ptouch_list) {
+    w_pfriction += 0.5 * model_.mass[i] * double(s_.dv_pfriction[i].dot(s_.v_prev[i] + s_.v[i]));
+    s_.dv_pfriction[i].setZero();
   }
-  ptouch_list_.clear();
+  s_.ptouch_list.clear();
   // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
-  for (const auto& [i, F] : f_ext_) external_cum_ += 0.5 * double(model_.dt) * double(F.dot(v_prev_[i] + v_[i]));
-  contact_cum_ -= w_contact;
-  shift_cum_ -= shift_energy();
-  compress_work_cum_ += w_compress;
-  friction_work_cum_ += w_friction;
-  pfriction_cum_ -= w_pfriction;
-  ke_fabric_half_ = ke;
-  ke_half_ = ke_fabric_half_ + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
-  time_ += model_.dt;
-  ++steps_;
+  for (const auto& [i, F] : s_.f_ext)
+    s_.external_cum += 0.5 * double(model_.dt) * double(F.dot(s_.v_prev[i] + s_.v[i]));
+  s_.contact_cum -= w_contact;
+  s_.shift_cum -= shift_energy();
+  s_.compress_work_cum += w_compress;
+  s_.friction_work_cum += w_friction;
+  s_.pfriction_cum -= w_pfriction;
+  s_.ke_fabric_half = ke;
+  s_.ke_half = s_.ke_fabric_half + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
+  run_.time += model_.dt;
+  ++run_.steps;
 }
 
 // The two precisions (solver.h: Precision).

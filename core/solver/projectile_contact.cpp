@@ -23,24 +23,24 @@ void SolverT<Real>::projectile_contact() {
     std::vector<int>& mine = near_part_[t];
     mine.clear();
     for (int i = lo; i < hi; ++i) {
-      const V3 rel = x_[i] - xp_;
+      const V3 rel = s_.x[i] - s_.xp;
       if (!(std::abs(rel.x()) > R || std::abs(rel.y()) > R || std::abs(rel.z()) > R)) mine.push_back(i);
     }
   }
   near_.clear();
   for (const auto& part : near_part_) near_.insert(near_.end(), part.begin(), part.end());
   for (const int i : near_) {
-    const V3 rel = x_[i] - xp_;
+    const V3 rel = s_.x[i] - s_.xp;
     if (model_.fixed[i] == fix_all) continue;
     V3 nrm;
     const double sd = model_.shape.sdf(rel, nrm);
     if (sd > 0) continue;
     ++touching;
-    ptouch_list_.push_back(i);
+    s_.ptouch_list.push_back(i);
     if (model_.projectile_holds) {
-      held_n_[i] = nrm;
-      held_flag_[i] = 1;
-      held_list_.push_back(i);
+      s_.held_n[i] = nrm;
+      s_.held_flag[i] = 1;
+      s_.held_list.push_back(i);
     }
     const double m = model_.mass[i];
     // Eq 19: push the node back onto the surface within one step (with the split, only
@@ -48,18 +48,18 @@ void SolverT<Real>::projectile_contact() {
     const Real pen = Real(-sd);
     Real push = pen / dt;
     if (model_.split_penetration) {
-      push = std::min(push, std::max(Real(0), -(v_[i] - vp_).dot(nrm)));
+      push = std::min(push, std::max(Real(0), -(s_.v[i] - s_.vp).dot(nrm)));
       const Real shift = pen - push * dt;
       if (shift > Real(0)) {
         V3 dx = shift * nrm;
         zero_fixed(dx, model_.fixed[i]);
-        x_[i] += dx;
-        dx_contact_[i] += dx;
+        s_.x[i] += dx;
+        s_.dx_contact[i] += dx;
       }
     }
     V3 dv_n = push * nrm;
     // Eq 20-22: friction from the tangential relative velocity, capped by mu_p |f_n|.
-    const V3 vr = v_[i] + dv_n - vp_;
+    const V3 vr = s_.v[i] + dv_n - s_.vp;
     const V3 vt = vr - vr.dot(nrm) * nrm;
     const Real vtn = vt.norm();
     V3 dv_t = V3::Zero();
@@ -69,10 +69,10 @@ void SolverT<Real>::projectile_contact() {
     }
     zero_fixed(dv_t, model_.fixed[i]);
     zero_fixed(dv_n, model_.fixed[i]);
-    v_[i] += dv_n + dv_t;
-    x_[i] += dt * (dv_n + dv_t);
-    dv_contact_[i] += dv_n;
-    dv_pfriction_[i] += dv_t;
+    s_.v[i] += dv_n + dv_t;
+    s_.x[i] += dt * (dv_n + dv_t);
+    s_.dv_contact[i] += dv_n;
+    s_.dv_pfriction[i] += dv_t;
     impulse_normal -= Real(m) * dv_n;
     impulse_fric -= Real(m) * dv_t;
   }
@@ -82,19 +82,19 @@ void SolverT<Real>::projectile_contact() {
     // In a symmetric model the mirrored parts' reactions cancel the in-plane components.
     if (model_.mirror_x) dvp_n.x() = dvp_t.x() = 0;
     if (model_.mirror_y) dvp_n.y() = dvp_t.y() = 0;
-    const V3 vp_old = vp_;
-    vp_ += dvp_n + dvp_t;
-    xp_ += dt * (vp_ - vp_old);
+    const V3 vp_old = s_.vp;
+    s_.vp += dvp_n + dvp_t;
+    s_.xp += dt * (s_.vp - vp_old);
     // Work of the reactions on the projectile (it has no other force: v- = vp_old).
-    const V3 vsum = vp_old + vp_;
-    contact_cum_ -= 0.5 * Mp * double(dvp_n.dot(vsum));
-    pfriction_cum_ -= 0.5 * Mp * double(dvp_t.dot(vsum));
-    last_contact_time_ = time_ + model_.dt;
-    had_contact_ = true;
+    const V3 vsum = vp_old + s_.vp;
+    s_.contact_cum -= 0.5 * Mp * double(dvp_n.dot(vsum));
+    s_.pfriction_cum -= 0.5 * Mp * double(dvp_t.dot(vsum));
+    run_.last_contact_time = run_.time + model_.dt;
+    run_.had_contact = true;
   }
-  proj_impulse_ = impulse_normal + impulse_fric;
-  nodes_on_projectile_ = touching;
-  projectile_force_ = double(proj_impulse_.norm() / dt);
+  s_.proj_impulse = impulse_normal + impulse_fric;
+  run_.nodes_on_projectile = touching;
+  run_.projectile_force = double(s_.proj_impulse.norm() / dt);
 }
 
 // A node the projectile pushed out this step rests on a rigid body: the yarn contact's
@@ -103,19 +103,19 @@ void SolverT<Real>::projectile_contact() {
 // the projectile instead. Summed here in node order (deterministic for any thread count).
 template <class Real>
 void SolverT<Real>::release_held() {
-  if (held_list_.empty()) return;
+  if (s_.held_list.empty()) return;
   V3 imp = V3::Zero(), imp_f = V3::Zero(), imp_c = V3::Zero();
-  for (int i : held_list_) {
-    imp += held_imp_[i];
-    imp_f += held_fric_[i];
-    imp_c += held_comp_[i];
-    held_imp_[i].setZero();
-    held_fric_[i].setZero();
-    held_comp_[i].setZero();
-    held_n_[i].setZero();
-    held_flag_[i] = 0;
+  for (int i : s_.held_list) {
+    imp += s_.held_imp[i];
+    imp_f += s_.held_fric[i];
+    imp_c += s_.held_comp[i];
+    s_.held_imp[i].setZero();
+    s_.held_fric[i].setZero();
+    s_.held_comp[i].setZero();
+    s_.held_n[i].setZero();
+    s_.held_flag[i] = 0;
   }
-  held_list_.clear();
+  s_.held_list.clear();
   auto dv_of = [&](const V3& p) {
     V3 dv = p / Real(model_.projectile_mass);
     if (model_.mirror_x) dv.x() = 0;
@@ -123,19 +123,19 @@ void SolverT<Real>::release_held() {
     return dv;
   };
   const V3 dvp = dv_of(imp);
-  const V3 vp_old = vp_;
-  vp_ += dvp;
-  xp_ += Real(model_.dt) * dvp;
+  const V3 vp_old = s_.vp;
+  s_.vp += dvp;
+  s_.xp += Real(model_.dt) * dvp;
   // The work on the projectile of the friction's and the compression's shares is theirs, the
   // rest the normal correction's.
-  const V3 vsum = vp_old + vp_;
+  const V3 vsum = vp_old + s_.vp;
   const double hm = 0.5 * model_.projectile_mass;
   const double w_all = hm * double(dvp.dot(vsum));
   const double w_f = hm * double(dv_of(imp_f).dot(vsum)), w_c = hm * double(dv_of(imp_c).dot(vsum));
-  contact_cum_ -= w_all - w_f - w_c;
-  friction_work_cum_ += w_f;
-  compress_work_cum_ += w_c;
-  projectile_force_ = double((proj_impulse_ + imp).norm()) / model_.dt;
+  s_.contact_cum -= w_all - w_f - w_c;
+  s_.friction_work_cum += w_f;
+  s_.compress_work_cum += w_c;
+  run_.projectile_force = double((s_.proj_impulse + imp).norm()) / model_.dt;
 }
 
 // The two precisions (solver.h: Precision).

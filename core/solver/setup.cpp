@@ -7,79 +7,79 @@ template <class Real>
 SolverT<Real>::SolverT(const Model& m, int threads)
     : Solver(m), zener_(ZenerConstants{m.k1 > 0 ? m.k1 : 1, m.k2 > 0 ? m.k2 : 1, m.damping > 0 ? m.damping : 1}, m.dt) {
   const int n = model_.node_count, ne = model_.element_count;
-  x_.resize(n);
-  v_.resize(n);
-  f_.resize(n);
-  v_prev_.assign(n, V3::Zero());
-  dv_contact_.assign(n, V3::Zero());
-  dv_friction_.assign(n, V3::Zero());
+  s_.x.resize(n);
+  s_.v.resize(n);
+  s_.f.resize(n);
+  s_.v_prev.assign(n, V3::Zero());
+  s_.dv_contact.assign(n, V3::Zero());
+  s_.dv_friction.assign(n, V3::Zero());
   compressible_ = model_.compression != CrossingCompression::rigid;
   if (compressible_) {
-    dv_compress_.assign(n, V3::Zero());
-    sum_c_.assign(n, V3::Zero());
+    s_.dv_compress.assign(n, V3::Zero());
+    s_.sum_c.assign(n, V3::Zero());
   }
-  dv_pfriction_.assign(n, V3::Zero());
-  dx_contact_.assign(n, V3::Zero());
-  held_n_.assign(n, V3::Zero());
-  held_flag_.assign(n, 0);
-  sum_n_.assign(n, V3::Zero());
-  sum_f_.assign(n, V3::Zero());
-  sum_s_.assign(n, V3::Zero());
-  held_imp_.assign(n, V3::Zero());
-  held_fric_.assign(n, V3::Zero());
-  held_comp_.assign(n, V3::Zero());
+  s_.dv_pfriction.assign(n, V3::Zero());
+  s_.dx_contact.assign(n, V3::Zero());
+  s_.held_n.assign(n, V3::Zero());
+  s_.held_flag.assign(n, 0);
+  s_.sum_n.assign(n, V3::Zero());
+  s_.sum_f.assign(n, V3::Zero());
+  s_.sum_s.assign(n, V3::Zero());
+  s_.held_imp.assign(n, V3::Zero());
+  s_.held_fric.assign(n, V3::Zero());
+  s_.held_comp.assign(n, V3::Zero());
   for (int i = 0; i < n; ++i) {
-    x_[i] = model_.x0[i].template cast<Real>();
-    v_[i].setZero();
-    f_[i].setZero();
+    s_.x[i] = model_.x0[i].template cast<Real>();
+    s_.v[i].setZero();
+    s_.f[i].setZero();
   }
-  strain_.assign(ne, Real(0));
-  prev_strain_.assign(ne, Real(0));
-  ev_.assign(ne, Real(0));
-  stress_.assign(ne, Real(0));
-  crimp_damp_stress_.assign(crimp_damping_k_ > 0 ? ne : 0, Real(0));
-  broken_flag_.assign(ne, 0);
-  elem_force_.assign(ne, V3::Zero());
-  elem_energy_.assign(ne, 0.0);
-  bend_force_.assign(model_.bend_k.size(), V3::Zero());
+  s_.strain.assign(ne, Real(0));
+  s_.prev_strain.assign(ne, Real(0));
+  s_.ev.assign(ne, Real(0));
+  s_.stress.assign(ne, Real(0));
+  s_.crimp_damp_stress.assign(crimp_damping_k_ > 0 ? ne : 0, Real(0));
+  s_.broken_flag.assign(ne, 0);
+  s_.elem_force.assign(ne, V3::Zero());
+  s_.elem_energy.assign(ne, 0.0);
+  s_.bend_force.assign(model_.bend_k.size(), V3::Zero());
   for (int e = 0; e < ne; ++e) {
     // Initial strain (slack for the straight-chord models).
-    const Real len = (x_[model_.elem_b[e]] - x_[model_.elem_a[e]]).norm();
+    const Real len = (s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]]).norm();
     Real eps = len / Real(model_.elem_rest[e]) - Real(1), mat = eps,
          dg = Real(1);  // (eps: the yarn's own strain after crimp_stage)
     if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
-    strain_[e] = eps;
-    prev_strain_[e] = mat;
+    s_.strain[e] = eps;
+    s_.prev_strain[e] = mat;
   }
   build_incidence();
   const int nc = int(model_.crossings.size());
-  cr_kw_.resize(nc);
-  cr_kf_.resize(nc);
-  cr_win_.assign(nc, WindowIds{});
-  cr_stick_w_.assign(nc, -1.0);
-  cr_stick_f_.assign(nc, -1.0);
-  cr_active_.assign(nc, 1);
-  cr_fn_.assign(nc, 0.0);
-  cr_ft_.assign(nc, 0.0);
-  cr_slip_.assign(nc, 0.0);
-  cr_gap_.assign(nc, 0.0);
-  cr_sliding_.assign(nc, 0);
-  cr_event_.assign(nc, 0);
-  cr_fn_step_.assign(nc, 0.0);
-  cr_u_.assign(nc, 0.0);
-  cr_stick_e_.assign(nc, 0.0);
-  cr_last_.resize(nc);
+  s_.cr_kw.resize(nc);
+  s_.cr_kf.resize(nc);
+  s_.cr_win.assign(nc, WindowIds{});
+  s_.cr_stick_w.assign(nc, -1.0);
+  s_.cr_stick_f.assign(nc, -1.0);
+  s_.cr_active.assign(nc, 1);
+  s_.cr_fn.assign(nc, 0.0);
+  s_.cr_ft.assign(nc, 0.0);
+  s_.cr_slip.assign(nc, 0.0);
+  s_.cr_gap.assign(nc, 0.0);
+  s_.cr_sliding.assign(nc, 0);
+  s_.cr_event.assign(nc, 0);
+  s_.cr_fn_step.assign(nc, 0.0);
+  s_.cr_u.assign(nc, 0.0);
+  s_.cr_stick_e.assign(nc, 0.0);
+  s_.cr_last.resize(nc);
   for (int c = 0; c < nc; ++c) {
-    cr_kw_[c] = model_.crossings[c].warp_node;
-    cr_kf_[c] = model_.crossings[c].weft_node;
-    cr_last_[c] = {cr_kw_[c], cr_kf_[c], pair_offset(c, cr_kw_[c], cr_kf_[c])};
+    s_.cr_kw[c] = model_.crossings[c].warp_node;
+    s_.cr_kf[c] = model_.crossings[c].weft_node;
+    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(c, s_.cr_kw[c], s_.cr_kf[c])};
   }
-  xp_ = model_.projectile_x0.cast<Real>();
-  vp_ = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
+  s_.xp = model_.projectile_x0.cast<Real>();
+  s_.vp = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
   set_threads(threads);
   // Initial ledger: all energy is the projectile's.
-  ke_half_ = 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
-  ledger_.projectile_ke_J = ke_half_;
+  s_.ke_half = 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
+  run_.ledger.projectile_ke_J = s_.ke_half;
   escape_radius2_ = std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2);
 }
 
@@ -98,7 +98,7 @@ inline void SolverT<Real>::build_incidence() {
     // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
     if (model_.bend_mirror[s] >= 0) {
-      // Mirror spring: bend_force_ is the force on this element's midpoint.
+      // Mirror spring: s_.bend_force is the force on this element's midpoint.
       nb[model_.elem_a[e1]].push_back({int(s), Real(0.5)});
       nb[model_.elem_b[e1]].push_back({int(s), Real(0.5)});
       continue;

@@ -31,6 +31,7 @@
 #include "solver.h"
 #include "solver/simd/contact_lanes.h"
 #include "solver/simd/element_lanes.h"
+#include "solver/state.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -66,83 +67,83 @@ class SolverT final : public Solver {
   }
 
   void step() override {
-    if (!divergence_.empty()) return;
+    if (!run_.divergence.empty()) return;
     internal_forces();                              // Eq 3, 23: element stress from strain; bending; failure
     close_ledger_row();                             // ledger at t - dt/2
     integrate();                                    // Eq 1-2
     projectile_contact();                           // Eq 18-22
     if (!model_.crossings.empty()) yarn_contact();  // Eq 5-17
     release_held();                                 // the yarn contact's push on held nodes -> projectile
-    if (!model_.crossings.empty() && steps_ % kPenetrationCheckEvery == 0) residual_penetration();
+    if (!model_.crossings.empty() && run_.steps % kPenetrationCheckEvery == 0) residual_penetration();
     finish_step();
-    if (steps_ % kProjectileCheckEvery == 0) check_projectile();
+    if (run_.steps % kProjectileCheckEvery == 0) check_projectile();
   }
 
   Vec3d projectile_position() const override {
-    return xp_.template cast<double>();
+    return s_.xp.template cast<double>();
   }
   Vec3d projectile_velocity() const override {
-    return vp_.template cast<double>();
+    return s_.vp.template cast<double>();
   }
   Vec3d position(int i) const override {
-    return x_[i].template cast<double>();
+    return s_.x[i].template cast<double>();
   }
   Vec3d velocity(int i) const override {
-    return v_[i].template cast<double>();
+    return s_.v[i].template cast<double>();
   }
   void set_velocity(int i, const Vec3d& v) override {
-    v_[i] = v.cast<Real>();
+    s_.v[i] = v.cast<Real>();
   }
   void set_position(int i, const Vec3d& x) override {
-    x_[i] = x.cast<Real>();
+    s_.x[i] = x.cast<Real>();
   }
   void set_projectile_velocity(const Vec3d& v) override {
-    vp_ = v.cast<Real>();
-    ke_half_ = fabric_ke() + 0.5 * model_.projectile_mass * double(vp_.squaredNorm());
+    s_.vp = v.cast<Real>();
+    s_.ke_half = fabric_ke() + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
   }
   void set_projectile_position(const Vec3d& x) override {
-    xp_ = x.cast<Real>();
+    s_.xp = x.cast<Real>();
   }
   void set_external_force(int node, const Vec3d& f) override {
-    for (auto& e : f_ext_)
+    for (auto& e : s_.f_ext)
       if (e.first == node) {
         e.second = f.cast<Real>();
         return;
       }
-    f_ext_.push_back({node, f.cast<Real>()});
+    s_.f_ext.push_back({node, f.cast<Real>()});
   }
   double strain(int e) const override {
-    return double(strain_[e]);
+    return double(s_.strain[e]);
   }
   double stress(int e) const override {
-    return double(stress_[e]);
+    return double(s_.stress[e]);
   }
   bool broken(int e) const override {
-    return broken_flag_[e] != 0;
+    return s_.broken_flag[e] != 0;
   }
   bool crossing_active(int c) const override {
-    return cr_active_[c] != 0;
+    return s_.cr_active[c] != 0;
   }
   bool crossing_sliding(int c) const override {
-    return cr_sliding_[c] != 0;
+    return s_.cr_sliding[c] != 0;
   }
   double crossing_normal_force(int c) const override {
-    return cr_fn_[c];
+    return s_.cr_fn[c];
   }
   double crossing_friction_force(int c) const override {
-    return cr_ft_[c];
+    return s_.cr_ft[c];
   }
   double crossing_slip_rate(int c) const override {
-    return cr_slip_[c];
+    return s_.cr_slip[c];
   }
   double crossing_gap(int c) const override {
-    return cr_gap_[c];
+    return s_.cr_gap[c];
   }
   int crossing_warp_node(int c) const override {
-    return cr_kw_[c];
+    return s_.cr_kw[c];
   }
   int crossing_weft_node(int c) const override {
-    return cr_kf_[c];
+    return s_.cr_kf[c];
   }
 
  protected:
@@ -153,87 +154,11 @@ class SolverT final : public Solver {
     state_io(r);
   }
 
-  // Every member a step carries to the next, in one list for writing and reading (the
-  // per-step scratch is included where a later step or the ledger reads it). What the
-  // model and the thread count determine is rebuilt by the constructor, not written.
+  // The whole dynamic state: the base class's RunState, then State (core/solver/state.h).
   template <class Ar>
   void state_io(Ar& ar) {
     base_io(ar);
-    ar.mark(0x52565331);  // "RVS1"
-    ar.vec(x_);
-    ar.vec(v_);
-    ar.vec(f_);
-    ar.vec(v_prev_);
-    ar.vec(dv_contact_);
-    ar.vec(dv_friction_);
-    ar.vec(dv_pfriction_);
-    ar.vec(dx_contact_);
-    ar.vec(dv_compress_);
-    ar.vec(sum_c_);
-    ar.vec(cr_u_);
-    ar.vec(cr_stick_e_);
-    ar.pod(stick_end_);
-    ar.pod(stick_prev_);
-    ar.pod(friction_work_cum_);
-    ar.pod(compress_end_);
-    ar.pod(compress_prev_);
-    ar.pod(compress_work_cum_);
-    ar.vec(held_n_);
-    ar.vec(held_imp_);
-    ar.vec(held_fric_);
-    ar.vec(held_comp_);
-    ar.vec(held_list_);
-    ar.vec(ptouch_list_);
-    ar.vec(held_flag_);
-    ar.vec(sum_n_);
-    ar.vec(sum_f_);
-    ar.vec(sum_s_);
-    ar.pod(proj_impulse_);
-    ar.vec(strain_);
-    ar.vec(prev_strain_);
-    ar.vec(ev_);
-    ar.vec(stress_);
-    ar.vec(broken_flag_);
-    ar.vec(elem_force_);
-    ar.vec(bend_force_);
-    ar.vec(elem_energy_);
-    ar.vec(cr_kw_);
-    ar.vec(cr_kf_);
-    ar.vec(cr_win_);
-    ar.vec(cr_stick_w_);
-    ar.vec(cr_stick_f_);
-    ar.vec(cr_fn_);
-    ar.vec(cr_ft_);
-    ar.vec(cr_slip_);
-    ar.vec(cr_gap_);
-    ar.vec(cr_fn_step_);
-    ar.vec(cr_last_);
-    ar.vec(cr_active_);
-    ar.vec(cr_sliding_);
-    ar.vec(cr_event_);
-    ar.pod(xp_);
-    ar.pod(vp_);
-    ar.pod(ke_half_);
-    ar.pod(ke_fabric_half_);
-    ar.pod(stored_now_);
-    ar.pod(stored_prev_);
-    ar.pod(viscous_cum_);
-    ar.pod(viscous_prev_);
-    ar.pod(released_cum_);
-    ar.pod(released_prev_);
-    ar.pod(pfriction_cum_);
-    ar.pod(contact_cum_);
-    ar.pod(external_cum_);
-    ar.pod(shift_cum_);
-    ar.vec(shifted_);
-    ar.vec(elem_mark_);
-    ar.vec(bend_mark_);
-    ar.pod(mark_);
-    ar.vec(f_ext_);
-    ar.vec(crimp_damp_stress_);
-    ar.pod(damping_cum_);
-    ar.pod(balance_window_);  // the slow-drift check's memory (close_ledger_row)
-    ar.mark(0x52564532);      // "RVE2"
+    s_.io(ar);
   }
 
   void hash_into(std::uint64_t& h) const override;
@@ -270,7 +195,6 @@ class SolverT final : public Solver {
 
   void close_ledger_row();
   static constexpr long kBalanceWindow = 64;  // steps per window of the drift/instability test
-  double balance_window_[8] = {0, 0, 0, 0, 0, 0, 0, 0};
 
   void integrate();
 
@@ -287,10 +211,10 @@ class SolverT final : public Solver {
     return model_.yarn_node(yarn, k);
   }
   bool seg_ok(int yarn, int s) const {
-    return s >= 0 && s + 1 < model_.yarn_size(yarn) && !broken_flag_[model_.yarn_elem_offset[yarn] + s];
+    return s >= 0 && s + 1 < model_.yarn_size(yarn) && !s_.broken_flag[model_.yarn_elem_offset[yarn] + s];
   }
   Real seg_len(int yarn, int s) const {
-    return (x_[ynode(yarn, s + 1)] - x_[ynode(yarn, s)]).norm();
+    return (s_.x[ynode(yarn, s + 1)] - s_.x[ynode(yarn, s)]).norm();
   }
 
   // int(std::floor(u)) for a material coordinate. Those are >= 0 but for rounding, and the
@@ -323,15 +247,7 @@ class SolverT final : public Solver {
     V3 xw[3], xf[3];
     bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
   };
-  // The window's node ids around a tracked pair: what a window is loaded from. Each
-  // crossing keeps those of its tracked pair (cr_win_), rebuilt when the pair moves.
-  struct WindowIds {
-    // The tracked pair these are for (none yet).
-    int kw = std::numeric_limits<int>::min(), kf = 0;
-    int node[6];          // warp kw-1..kw+1, weft kf-1..kf+1 (-1: past a yarn's end)
-    int wseg0, fseg0;     // element index of warp segment kw-1 and weft segment kf-1
-    std::uint8_t exists;  // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
-  };
+  using WindowIds = detail::WindowIds;
   WindowIds window_ids(const Crossing& cr, int kw, int kf) const;
   void load_window(const WindowIds& id, Window& w) const;
   void load_window(int c, Window& w);
@@ -500,7 +416,7 @@ class SolverT final : public Solver {
   template <class Pos>
   double bend_energy_at(int sp, Pos&& pos) const {
     const int e1 = model_.bend_e1[sp], e2 = model_.bend_e2[sp];
-    if (broken_flag_[e1] || broken_flag_[e2]) return 0;
+    if (s_.broken_flag[e1] || s_.broken_flag[e2]) return 0;
     const double k = model_.bend_k[sp], r = model_.bend_rest[sp];
     if (const int ax = model_.bend_mirror[sp]; ax >= 0) {
       const double mc = 0.5 * double(pos(model_.elem_a[e1])[ax] + pos(model_.elem_b[e1])[ax]);
@@ -523,6 +439,10 @@ class SolverT final : public Solver {
   void check_projectile();
 
  private:
+  // --- The run's dynamic state (state.h): plain data, copied, hashed and written as one.
+  State<Real> s_;
+
+  // --- What the model and the options determine (rebuilt by the constructor, not written).
   int threads_ = 1;
   // Lanes in use (contact_lanes.h, element_lanes.h): asked for, double precision, and the
   // processor has them.
@@ -531,68 +451,31 @@ class SolverT final : public Solver {
   }
   bool simd_ = lanes_possible();
   ZenerStepper zener_;
-  std::vector<V3> x_, v_, f_, v_prev_;
-  std::vector<V3> dv_contact_, dv_friction_, dv_pfriction_, dx_contact_;  // this step's corrections, per mechanism
-  std::vector<V3> dv_compress_, sum_c_;  // the compression law's impulses (only when crossings are compressible)
   bool compressible_ = false;
-  std::vector<double> cr_u_;        // per crossing: the compression law's stored energy at the end of the step
-  std::vector<double> cr_stick_e_;  // per crossing: the stick penalty springs' energy (pass_friction)
-  double stick_end_ = 0, stick_prev_ = 0, friction_work_cum_ = 0;
-  double compress_end_ = 0, compress_prev_ = 0, compress_work_cum_ = 0;
-  // Nodes the projectile pushed out this step: the surface normal (zero: not held), the
-  // impulse the yarn contact passed through them to the projectile, and their list.
-  std::vector<V3> held_n_, held_imp_;
-  std::vector<V3> held_fric_, held_comp_;  // the friction's and the compression's shares of held_imp_
-  std::vector<int> held_list_;
-  std::vector<int> near_;                    // projectile_contact: nodes in its bounding box
-  std::vector<std::vector<int>> near_part_;  // the same, per thread
-  std::vector<int> ptouch_list_;             // nodes the projectile touched this step (their dv_pfriction_)
-  std::vector<std::uint8_t> held_flag_;      // held_n_ is nonzero (a compact test for the hot loops)
-  std::vector<V3> sum_n_, sum_f_, sum_s_;    // a pass's corrections summed per node (gather, finish_pass)
-  V3 proj_impulse_ = V3::Zero();             // the projectile contact's impulse on the projectile this step
-  std::vector<Real> strain_, prev_strain_, ev_, stress_;
-  std::vector<std::uint8_t> broken_flag_;
-  std::vector<V3> elem_force_, bend_force_;
-  std::vector<double> elem_energy_;
+  // Node -> (element, sign) and node -> (bending spring, weight), in CSR form (build_incidence).
   std::vector<int> inc_e_off_, inc_b_off_;
   std::vector<std::pair<int, Real>> inc_e_, inc_b_;
-  std::vector<int> cr_kw_, cr_kf_;
-  std::vector<int> rec_first_, rec_last_;  // (threads) node bounds of the pass's records, running
-  std::vector<WindowIds> cr_win_;          // per crossing (load_window)
-  std::vector<double> cr_stick_w_, cr_stick_f_, cr_fn_, cr_ft_, cr_slip_, cr_gap_, cr_fn_step_;
-  // Each crossing's tracked node pair at the end of the last step and the offset between
-  // its two nodes then (weft minus warp): how far the yarns moved against each other.
-  struct LastPair {
-    int kw, kf;
-    V3 offset;
-  };
-  std::vector<LastPair> cr_last_;
+  double escape_radius2_ = 1;
+  // beta E_inst of the element damping (model's element_damping_beta times the instantaneous modulus).
+  double damping_k_ = model_.element_damping_beta * model_.modulus_inst;
+  double crimp_damping_k_ = model_.crimp_damping_beta * model_.modulus_inst;  // the same for yarn.crimp_damping
+
+  // --- Per-step scratch: what a stage needs within a step and forgets.
+  std::vector<int> near_;                    // projectile_contact: nodes in its bounding box
+  std::vector<std::vector<int>> near_part_;  // the same, per thread
+  std::vector<int> rec_first_, rec_last_;    // (threads) node bounds of the pass's records, running
+  std::vector<CrossingImpulse> impulses_;
+  std::vector<CrossingImpulse> held_records_;  // one thread: records touching held nodes (yarn_contact)
+
+  using LastPair = detail::LastPair<Real>;
   V3 pair_offset(int c, int kw, int kf) const {
     const Crossing& cr = model_.crossings[c];
     const int nw = model_.yarn_size(cr.warp_yarn), nf = model_.yarn_size(cr.weft_yarn);
     const int iw = model_.yarn_node(cr.warp_yarn, std::clamp(kw, 0, nw - 1));
     const int jf = model_.yarn_node(cr.weft_yarn, std::clamp(kf, 0, nf - 1));
-    return x_[jf] - x_[iw];
+    return s_.x[jf] - s_.x[iw];
   }
-  std::vector<std::uint8_t> cr_active_, cr_sliding_, cr_event_;
-  std::vector<CrossingImpulse> impulses_;
-  std::vector<CrossingImpulse> held_records_;  // one thread: records touching held nodes (yarn_contact)
   enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8, ev_separated = 16 };
-  V3 xp_, vp_;
-  double ke_half_ = 0, ke_fabric_half_ = 0;
-  double stored_now_ = 0, stored_prev_ = 0, viscous_cum_ = 0, viscous_prev_ = 0, released_cum_ = 0, released_prev_ = 0;
-  double pfriction_cum_ = 0, contact_cum_ = 0, external_cum_ = 0;
-  double shift_cum_ = 0;      // the position shifts' work against the yarn forces (ledger shift_work_J)
-  std::vector<int> shifted_;  // shift_energy: the nodes shifted this step
-  std::vector<unsigned> elem_mark_, bend_mark_;  // ... and the elements / springs already counted
-  unsigned mark_ = 0;
-  std::vector<std::pair<int, V3>> f_ext_;
-  double escape_radius2_ = 1;
-  // beta E_inst of the element damping (model's element_damping_beta times the instantaneous modulus).
-  double damping_k_ = model_.element_damping_beta * model_.modulus_inst;
-  double crimp_damping_k_ = model_.crimp_damping_beta * model_.modulus_inst;  // the same for yarn.crimp_damping
-  std::vector<Real> crimp_damp_stress_;  // per element: the crimp damping's stress of the last step
-  double damping_cum_ = 0;
 };
 
 }  // namespace ravel::detail

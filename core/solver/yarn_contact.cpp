@@ -78,20 +78,20 @@ RAVEL_INLINE void SolverT<Real>::load_window(const WindowIds& id, Window& w) con
   for (int k = 0; k < 3; ++k) {
     w.wnode[k] = id.node[k];
     w.fnode[k] = id.node[3 + k];
-    if (w.wnode[k] >= 0) w.xw[k] = x_[w.wnode[k]];
-    if (w.fnode[k] >= 0) w.xf[k] = x_[w.fnode[k]];
+    if (w.wnode[k] >= 0) w.xw[k] = s_.x[w.wnode[k]];
+    if (w.fnode[k] >= 0) w.xf[k] = s_.x[w.fnode[k]];
   }
   for (int k = 0; k < 2; ++k) {
-    w.wseg[k] = (id.exists >> k & 1) && !broken_flag_[id.wseg0 + k];
-    w.fseg[k] = (id.exists >> (2 + k) & 1) && !broken_flag_[id.fseg0 + k];
+    w.wseg[k] = (id.exists >> k & 1) && !s_.broken_flag[id.wseg0 + k];
+    w.fseg[k] = (id.exists >> (2 + k) & 1) && !s_.broken_flag[id.fseg0 + k];
   }
 }
 
 // The window of crossing c around its tracked pair.
 template <class Real>
 RAVEL_INLINE void SolverT<Real>::load_window(int c, Window& w) {
-  WindowIds& id = cr_win_[c];
-  if (id.kw != cr_kw_[c] || id.kf != cr_kf_[c]) id = window_ids(model_.crossings[c], cr_kw_[c], cr_kf_[c]);
+  WindowIds& id = s_.cr_win[c];
+  if (id.kw != s_.cr_kw[c] || id.kf != s_.cr_kf[c]) id = window_ids(model_.crossings[c], s_.cr_kw[c], s_.cr_kf[c]);
   load_window(id, w);
 }
 
@@ -121,21 +121,21 @@ inline bool SolverT<Real>::track(int c, Window& w, bool loaded) {
       }
     }
     if (bw == 1 && bf == 1) break;
-    cr_kw_[c] += bw - 1;
-    cr_kf_[c] += bf - 1;
+    s_.cr_kw[c] += bw - 1;
+    s_.cr_kf[c] += bf - 1;
     if (round >= 1) skipped = true;
-    load_window(cr, cr_kw_[c], cr_kf_[c], w);
+    load_window(cr, s_.cr_kw[c], s_.cr_kf[c], w);
   }
   return skipped;
 }
 
 template <class Real>
 RAVEL_INLINE void SolverT<Real>::release(int c, std::uint8_t why) {
-  cr_active_[c] = 0;
-  cr_stick_e_[c] = 0;  // the penalty spring lets go (its energy then shows as friction work)
-  cr_fn_[c] = cr_ft_[c] = cr_slip_[c] = 0;
-  cr_sliding_[c] = 0;
-  cr_event_[c] |= why;
+  s_.cr_active[c] = 0;
+  s_.cr_stick_e[c] = 0;  // the penalty spring lets go (its energy then shows as friction work)
+  s_.cr_fn[c] = s_.cr_ft[c] = s_.cr_slip[c] = 0;
+  s_.cr_sliding[c] = 0;
+  s_.cr_event[c] |= why;
 }
 
 template <class Real>
@@ -245,7 +245,7 @@ RAVEL_INLINE bool SolverT<Real>::slipped_off(int yarn, int seg, Real frac, const
   const bool at_start =
       frac <= Real(1e-6) && !seg_ok(yarn, seg - 1) && !(seg == 0 && !(model_.yarn_end_free[yarn] & 1));
   if (!at_end && !at_start) return false;
-  const V3 t = x_[ynode(yarn, seg + 1)] - x_[ynode(yarn, seg)];
+  const V3 t = s_.x[ynode(yarn, seg + 1)] - s_.x[ynode(yarn, seg)];
   const Real L = t.norm();
   if (L <= Real(0)) return false;
   const Real along = toward_partner.dot(t) / L;
@@ -355,7 +355,7 @@ template <class Real>
 void SolverT<Real>::yarn_contact() {
   const int nc = int(model_.crossings.size());
   const int N = model_.contact_iterations;
-  impulses_.resize(nc);  // (cr_fn_step_, cr_ft_ and cr_event_ are cleared by each crossing's first pass)
+  impulses_.resize(nc);  // (s_.cr_fn_step, s_.cr_ft and s_.cr_event are cleared by each crossing's first pass)
   for (int pass = 1; pass <= N; ++pass) {
     // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
     const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
@@ -423,43 +423,47 @@ void SolverT<Real>::yarn_contact() {
   for (int c = 0; c < nc; ++c) {
     // How far the two yarns' material moved against each other this step: the offset of
     // last step's tracked node pair, then and now (the pair may have been re-chosen since).
-    const LastPair was = cr_last_[c];
+    const LastPair was = s_.cr_last[c];
     const Real moved = (pair_offset(c, was.kw, was.kf) - was.offset).norm();
-    cr_last_[c] = {cr_kw_[c], cr_kf_[c], pair_offset(c, cr_kw_[c], cr_kf_[c])};
-    if (cr_active_[c]) {
-      fsum += cr_fn_[c];
-      usum += cr_u_[c];
-      esum += cr_stick_e_[c];
-      if (cr_fn_[c] > 0) (cr_sliding_[c] ? sliding : stuck)++;
+    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(c, s_.cr_kw[c], s_.cr_kf[c])};
+    if (s_.cr_active[c]) {
+      fsum += s_.cr_fn[c];
+      usum += s_.cr_u[c];
+      esum += s_.cr_stick_e[c];
+      if (s_.cr_fn[c] > 0) (s_.cr_sliding[c] ? sliding : stuck)++;
       // Material slip: the stick point's advance, but never faster than the yarns move
       // against each other (a jump of the closest point along a kinked or re-paired
       // yarn is not slip).
-      cr_slip_[c] = std::min(cr_slip_[c], double(moved) / double(model_.dt));
+      s_.cr_slip[c] = std::min(s_.cr_slip[c], double(moved) / double(model_.dt));
     }
-    std::uint8_t ev = cr_event_[c];
+    std::uint8_t ev = s_.cr_event[c];
     if (!ev) continue;
     const Crossing& cr = model_.crossings[c];
     auto note = [&](long& count, double& t, int& i, int& j) {
-      if (count++ == 0) t = time_, i = cr.grid_i, j = cr.grid_j;
+      if (count++ == 0) t = run_.time, i = cr.grid_i, j = cr.grid_j;
     };
     // A pair that moved more than one node while the yarns moved less than half a node
     // against each other was re-chosen by the changed shape (yarns folded, bunched or apart
     // near the projectile), not outrun: a smaller time step would not change it.
     if ((ev & ev_skip) && moved < Real(0.5) * Real(model_.elem_rest[model_.yarn_elem_offset[cr.warp_yarn]])) {
       ev &= std::uint8_t(~ev_skip);
-      note(diag_.repaired, diag_.first_repair_time, diag_.first_repair_i, diag_.first_repair_j);
+      note(run_.diag.repaired, run_.diag.first_repair_time, run_.diag.first_repair_i, run_.diag.first_repair_j);
     }
-    if (ev & ev_skip) note(diag_.skipped_nodes, diag_.first_skip_time, diag_.first_skip_i, diag_.first_skip_j);
-    if (ev & ev_ravel) note(diag_.ravelled, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
-    if (ev & ev_lost) note(diag_.lost_segments, diag_.first_ravel_time, diag_.first_ravel_i, diag_.first_ravel_j);
-    if (ev & ev_pass) note(diag_.passed_through, diag_.first_pass_time, diag_.first_pass_i, diag_.first_pass_j);
-    if (ev & ev_separated) ++diag_.separated;
+    if (ev & ev_skip)
+      note(run_.diag.skipped_nodes, run_.diag.first_skip_time, run_.diag.first_skip_i, run_.diag.first_skip_j);
+    if (ev & ev_ravel)
+      note(run_.diag.ravelled, run_.diag.first_ravel_time, run_.diag.first_ravel_i, run_.diag.first_ravel_j);
+    if (ev & ev_lost)
+      note(run_.diag.lost_segments, run_.diag.first_ravel_time, run_.diag.first_ravel_i, run_.diag.first_ravel_j);
+    if (ev & ev_pass)
+      note(run_.diag.passed_through, run_.diag.first_pass_time, run_.diag.first_pass_i, run_.diag.first_pass_j);
+    if (ev & ev_separated) ++run_.diag.separated;
   }
-  yarn_force_ = fsum;
-  compress_end_ = usum;
-  stick_end_ = esum;
-  sliding_count_ = sliding;
-  stuck_count_ = stuck;
+  run_.yarn_force = fsum;
+  s_.compress_end = usum;
+  s_.stick_end = esum;
+  run_.sliding_count = sliding;
+  run_.stuck_count = stuck;
 }
 
 template <class Real>
@@ -471,10 +475,10 @@ RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
       for (int k = 0; k < count; ++k)
         if (unsigned(nodes[k] - lo) < span && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
     };
-    if (r.has_n) each(6, r.node, r.w, r.P, sum_n_.data());
-    if (r.has_f) each(4, r.fnode, r.fw, r.F, sum_f_.data());
-    if (r.has_s) each(6, r.node, r.w, r.S, sum_s_.data());
-    if (r.has_c) each(6, r.node, r.w, r.C, sum_c_.data());
+    if (r.has_n) each(6, r.node, r.w, r.P, s_.sum_n.data());
+    if (r.has_f) each(4, r.fnode, r.fw, r.F, s_.sum_f.data());
+    if (r.has_s) each(6, r.node, r.w, r.S, s_.sum_s.data());
+    if (r.has_c) each(6, r.node, r.w, r.C, s_.sum_c.data());
     return false;
   }
   bool held = false;
@@ -483,7 +487,7 @@ RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
     for (int k = 0; k < count; ++k) {
       const int i = nodes[k];
       if (unsigned(i - lo) >= unsigned(hi - lo) || w[k] == Real(0)) continue;  // i in [lo, hi), -1 not
-      if (held_flag_[i]) {
+      if (s_.held_flag[i]) {
         held = true;
         if (what & kHeld) take_held(i, w[k] * q);
       } else if (what & kSums) {
@@ -492,14 +496,15 @@ RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
     }
   };
   if (r.has_n)
-    each(6, r.node, r.w, r.P, sum_n_, [&](int i, const V3& p) { apply_impulse(i, p, &dv_contact_, r.hold, nullptr); });
+    each(6, r.node, r.w, r.P, s_.sum_n,
+         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_contact, r.hold, nullptr); });
   if (r.has_f)
-    each(4, r.fnode, r.fw, r.F, sum_f_,
-         [&](int i, const V3& p) { apply_impulse(i, p, &dv_friction_, r.hold, &held_fric_); });
-  if (r.has_s) each(6, r.node, r.w, r.S, sum_s_, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
+    each(4, r.fnode, r.fw, r.F, s_.sum_f,
+         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_friction, r.hold, &s_.held_fric); });
+  if (r.has_s) each(6, r.node, r.w, r.S, s_.sum_s, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
   if (r.has_c)
-    each(6, r.node, r.w, r.C, sum_c_,
-         [&](int i, const V3& p) { apply_impulse(i, p, &dv_compress_, r.hold, &held_comp_); });
+    each(6, r.node, r.w, r.C, s_.sum_c,
+         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_compress, r.hold, &s_.held_comp); });
   return held;
 }
 
@@ -510,10 +515,10 @@ RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
   for (int i = lo; i < hi; ++i) {
     const Real im = Real(model_.inv_mass[i]);
     const std::uint8_t fx = model_.fixed[i];
-    V3 dvn = im * sum_n_[i], dvf = im * sum_f_[i], dx = im * sum_s_[i];
-    sum_n_[i].setZero();
-    sum_f_[i].setZero();
-    sum_s_[i].setZero();
+    V3 dvn = im * s_.sum_n[i], dvf = im * s_.sum_f[i], dx = im * s_.sum_s[i];
+    s_.sum_n[i].setZero();
+    s_.sum_f[i].setZero();
+    s_.sum_s[i].setZero();
     if (fx) {
       zero_fixed(dvn, fx);
       zero_fixed(dvf, fx);
@@ -521,17 +526,17 @@ RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
     }
     V3 dv = dvn + dvf;
     if (compressible_) {
-      V3 dvc = im * sum_c_[i];
-      sum_c_[i].setZero();
+      V3 dvc = im * s_.sum_c[i];
+      s_.sum_c[i].setZero();
       if (fx) zero_fixed(dvc, fx);
       dv += dvc;
-      dv_compress_[i] += dvc;
+      s_.dv_compress[i] += dvc;
     }
-    v_[i] += dv;
-    dv_contact_[i] += dvn;
-    dv_friction_[i] += dvf;
-    x_[i] += dt * dv + dx;
-    dx_contact_[i] += dx;
+    s_.v[i] += dv;
+    s_.dv_contact[i] += dvn;
+    s_.dv_friction[i] += dvf;
+    s_.x[i] += dt * dv + dx;
+    s_.dx_contact[i] += dx;
   }
 }
 
@@ -543,18 +548,18 @@ template <class Real>
 inline void SolverT<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part) {
   const Real im = Real(model_.inv_mass[i]);
   if (im == Real(0)) return;
-  const Real pn = P.dot(held_n_[i]);
+  const Real pn = P.dot(s_.held_n[i]);
   if (hold && pn < Real(0)) {
     // Held by the projectile: the part pushing into it passes to the projectile.
-    held_imp_[i] += pn * held_n_[i];
-    if (part) (*part)[i] += pn * held_n_[i];
-    P -= pn * held_n_[i];
+    s_.held_imp[i] += pn * s_.held_n[i];
+    if (part) (*part)[i] += pn * s_.held_n[i];
+    P -= pn * s_.held_n[i];
   }
   V3 dv = im * P;
   zero_fixed(dv, model_.fixed[i]);
-  v_[i] += dv;
+  s_.v[i] += dv;
   if (acc) (*acc)[i] += dv;
-  x_[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
+  s_.x[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
 }
 
 // Move a node by a mass-weighted shift (no velocity change); recorded for the ledger.
@@ -563,11 +568,11 @@ RAVEL_INLINE void SolverT<Real>::shift_node(int i, const V3& S, bool hold) {
   const Real im = Real(model_.inv_mass[i]);
   if (im == Real(0)) return;
   V3 dx = im * S;
-  const Real dn = dx.dot(held_n_[i]);
-  if (hold && dn < Real(0)) dx -= dn * held_n_[i];  // not into the projectile that holds it
+  const Real dn = dx.dot(s_.held_n[i]);
+  if (hold && dn < Real(0)) dx -= dn * s_.held_n[i];  // not into the projectile that holds it
   zero_fixed(dx, model_.fixed[i]);
-  x_[i] += dx;
-  dx_contact_[i] += dx;
+  s_.x[i] += dx;
+  s_.dx_contact[i] += dx;
 }
 
 // `first`: the step's first pass, which clears the crossings' per-step state.
@@ -578,19 +583,19 @@ inline void SolverT<Real>::crossing_batch(int c0, int c1, Real alpha, bool first
   bool on[kBatch];
   bool tracked[kBatch];
   if (first) {
-    for (int c = c0; c < c1; ++c) cr_fn_step_[c] = 0, cr_ft_[c] = 0, cr_event_[c] = 0, cr_u_[c] = 0;
+    for (int c = c0; c < c1; ++c) s_.cr_fn_step[c] = 0, s_.cr_ft[c] = 0, s_.cr_event[c] = 0, s_.cr_u[c] = 0;
   }
   for (int c = c0; c < c1; ++c) {
     const int k = c - c0;
     CrossingImpulse& r = out[k];
     r.has_n = r.has_f = r.has_s = r.has_c = r.hold = r.any_held = false;
-    on[k] = cr_active_[c];
+    on[k] = s_.cr_active[c];
     tracked[k] = false;
     if (!on[k]) continue;
     load_window(c, w[k]);
     // Windows the lanes take are searched there (and here again only if the pair moves).
     if (lane_window(w[k])) continue;
-    if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+    if (track(c, w[k], true)) s_.cr_event[c] |= ev_skip;
     tracked[k] = true;
   }
   lanes::ClosestBatch lb;
@@ -599,7 +604,7 @@ inline void SolverT<Real>::crossing_batch(int c0, int c1, Real alpha, bool first
     const int k = c - c0;
     if (!on[k] || tracked[k] || !g[k].moved) continue;
     // The nearest pair moved: the one-crossing search from here, then its closest points.
-    if (track(c, w[k], true)) cr_event_[c] |= ev_skip;
+    if (track(c, w[k], true)) s_.cr_event[c] |= ev_skip;
     g[k] = closest(model_.crossings[c], w[k]);
   }
   // The rest of each crossing, in three stages over the batch: each stage is a chain of
@@ -665,7 +670,7 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
     delta = D - g.dist;
     u = dlen > Real(1e-12) * D ? unit_d() : n;
   } else {
-    if (g.dist > D && cr_gap_[c] > 0) {
+    if (g.dist > D && s_.cr_gap[c] > 0) {
       // On the "wrong" side by more than D, but apart (|d| > D) at the end of the last
       // step too: the yarns never came within D of each other, so they did not pass
       // through each other (that takes far less than D of relative motion per step); the
@@ -701,12 +706,12 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
     if (i < 0) continue;
     const Real wi = r.w[k] * r.w[k] * Real(model_.inv_mass[i]);
     winv_free += wi;
-    if (!held_flag_[i]) {
+    if (!s_.held_flag[i]) {
       winv += wi;  // free = 1 exactly
       continue;
     }
     r.any_held = true;
-    const Real un = u.dot(held_n_[i]);
+    const Real un = u.dot(s_.held_n[i]);
     const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
     winv += wi * free;
   }
@@ -725,7 +730,7 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
   if (model_.split_penetration && (floor_pen > Real(0) || compliant)) {
     Real vrel = 0;
     for (int k = 0; k < 6; ++k)
-      if (r.node[k] >= 0) vrel += r.w[k] * v_[r.node[k]].dot(u);
+      if (r.node[k] >= 0) vrel += r.w[k] * s_.v[r.node[k]].dot(u);
     approach = std::max(Real(0), -vrel);
   }
   Real P = 0;
@@ -754,8 +759,8 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
     r.has_n = P > Real(0);
   }
   if (compliant) compress(c, alpha, last, std::min(span, span - delta), span, winv, P, approach, u, r);
-  cr_fn_step_[c] += double(P / dt);  // Eq 11
-  if (last) cr_gap_[c] = double(g.dist - D);
+  s_.cr_fn_step[c] += double(P / dt);  // Eq 11
+  if (last) s_.cr_gap[c] = double(g.dist - D);
   return true;
 }
 
@@ -776,7 +781,7 @@ RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p
   const Crossing& cr = model_.crossings[c];
   const double dt = model_.dt;
   const double kap = dt * dt * double(winv), Fh = cr.compression_force;
-  const double f_acc = cr_fn_step_[c] + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
+  const double f_acc = s_.cr_fn_step[c] + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
   const double b = kap * (f_acc + Fh) - sp, k4 = 4 * kap * Fh * sz;
   const double root = std::sqrt(b * b + k4);
   double s = b > 0 ? 0.5 * k4 / (b + root) : 0.5 * (root - b);  // the positive root, without cancellation
@@ -786,7 +791,7 @@ RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p
   // A closure beyond that was there before the step (a yarn end snapping in, a tracking
   // move, a neighbour's shift): as with rigid contact, it is removed by moving the nodes,
   // with the force capped and the distance the law's at that force.
-  const double qv_max = kap * (cr_fn_[c] + double(approach) / (dt * double(winv)) - f_acc);
+  const double qv_max = kap * (s_.cr_fn[c] + double(approach) / (dt * double(winv)) - f_acc);
   if (model_.split_penetration && q > std::max(0.0, qv_max)) {
     qv = std::max(0.0, qv_max);
     s = Fh * sz / (f_acc + qv / kap + Fh);
@@ -800,7 +805,7 @@ RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p
     const Real Pc = Real(double(alpha) * qv / (dt * double(winv)));
     r.C = Pc * u;
     r.has_c = Pc > Real(0);
-    cr_fn_step_[c] += double(Pc) / dt;
+    s_.cr_fn_step[c] += double(Pc) / dt;
   } else {
     q = 0;
   }
@@ -808,7 +813,7 @@ RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p
     // The law's stored energy at the distance this crossing now enforces:
     // integral of F_half (span / x - 1) dx from s to span.
     const double se = std::min(sz, sp + q);
-    cr_u_[c] = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
+    s_.cr_u[c] = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
   }
 }
 
@@ -836,7 +841,7 @@ RAVEL_INLINE void SolverT<Real>::friction_setup(int c, const Window& w, const Co
     s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
     s.lw = s.lf = KnownLengths{};
   }
-  if (cr_stick_w_[c] < 0) cr_stick_w_[c] = s.cw, cr_stick_f_[c] = s.cf;
+  if (s_.cr_stick_w[c] < 0) s_.cr_stick_w[c] = s.cw, s_.cr_stick_f[c] = s.cf;
   Real fa, fb;
   coord_nodes(cr.warp_yarn, s.cw, r.fnode[0], r.fnode[1], fa);
   coord_nodes(cr.weft_yarn, s.cf, r.fnode[2], r.fnode[3], fb);
@@ -855,7 +860,7 @@ RAVEL_INLINE void SolverT<Real>::pass_friction(int c, Real alpha, bool last, con
   const Crossing& cr = model_.crossings[c];
   const Real dt = Real(model_.dt);
   const double fwinv = s.fwinv;
-  const double fn = cr_fn_step_[c];
+  const double fn = s_.cr_fn_step[c];
   const double limit = model_.friction * fn;
   double ft_w = 0, ft_f = 0, moved = 0, stored = 0;
   bool slid = false;
@@ -877,21 +882,21 @@ RAVEL_INLINE void SolverT<Real>::pass_friction(int c, Real alpha, bool last, con
       }
       stored += force * force / (2 * K);  // the penalty spring K/2 e^2 (stick_energy)
     };
-    one_yarn(cr.warp_yarn, s.cw, cr_stick_w_[c], ft_w, s.lw);
-    one_yarn(cr.weft_yarn, s.cf, cr_stick_f_[c], ft_f, s.lf);
+    one_yarn(cr.warp_yarn, s.cw, s_.cr_stick_w[c], ft_w, s.lw);
+    one_yarn(cr.weft_yarn, s.cf, s_.cr_stick_f[c], ft_f, s.lf);
   }
   if (ft_w != 0 || ft_f != 0) {
     // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
     const V3 Fwarp = Real(ft_w) * s.Tw - Real(ft_f) * s.Tf;
     r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
     r.has_f = true;
-    cr_ft_[c] = double(Fwarp.norm());
+    s_.cr_ft[c] = double(Fwarp.norm());
   }
   if (last) {
-    cr_sliding_[c] = slid;
-    cr_slip_[c] = moved / double(dt);
-    cr_fn_[c] = fn;
-    cr_stick_e_[c] = stored;
+    s_.cr_sliding[c] = slid;
+    s_.cr_slip[c] = moved / double(dt);
+    s_.cr_fn[c] = fn;
+    s_.cr_stick_e[c] = stored;
   }
 }
 
@@ -909,7 +914,7 @@ void SolverT<Real>::residual_penetration() {
     ContactGeom g[kBatch];
     bool on[kBatch];
     for (int c = c0; c < c1; ++c) {
-      on[c - c0] = cr_active_[c];
+      on[c - c0] = s_.cr_active[c];
       if (on[c - c0]) load_window(c, w[c - c0]);
     }
     lanes::ClosestBatch lb;
@@ -926,7 +931,7 @@ void SolverT<Real>::residual_penetration() {
       worst = std::max(worst, pen);
     }
   }
-  diag_.max_penetration = std::max(diag_.max_penetration, worst);
+  run_.diag.max_penetration = std::max(run_.diag.max_penetration, worst);
 }
 
 // The two precisions (solver.h: Precision).

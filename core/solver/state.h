@@ -1,0 +1,197 @@
+// State<Real>: the dynamic state of a run as plain data (like MuJoCo's mjData beside mjModel):
+// every array and scalar one step carries to the next. The Model (core/model.h) is what does
+// not change during a run; what the model determines (incidence lists, material constants)
+// and the per-step scratch live in the solver, not here.
+//
+// A State can be copied (it is a value), hashed (hash: the bytes the state-hash probe
+// covers) and written and read (io, with core/state_io.h's StateWriter / StateReader): the
+// checkpoints of `ravel run --resume` are built on it. Together with the precision-independent
+// RunState of solver.h (time, step count, ledger, diagnostics) it is the whole of a run.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace ravel::detail {
+
+// The node ids of a crossing's window around its tracked pair: what a window is loaded from.
+// Each crossing keeps those of its tracked pair, rebuilt when the pair moves.
+struct WindowIds {
+  // The tracked pair these are for (none yet).
+  int kw = std::numeric_limits<int>::min(), kf = 0;
+  int node[6];          // warp kw-1..kw+1, weft kf-1..kf+1 (-1: past a yarn's end)
+  int wseg0, fseg0;     // element index of warp segment kw-1 and weft segment kf-1
+  std::uint8_t exists;  // bits 0, 1: warp segments kw-1, kw exist; 2, 3: weft kf-1, kf
+};
+
+// A crossing's tracked node pair at the end of the last step and the offset between its two
+// nodes then (weft minus warp): how far the yarns moved against each other.
+template <class Real>
+struct LastPair {
+  int kw, kf;
+  Eigen::Matrix<Real, 3, 1> offset;
+};
+
+template <class Real>
+struct State {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+
+  // --- Nodes (SPEC §1): x(t), v(t - dt/2) (leapfrog), the internal forces of the last
+  // internal_forces, and v before this step's integrate (the corrections' work, finish_step).
+  std::vector<V3> x, v, f, v_prev;
+  // This step's corrections, per mechanism (yarn contact normal and friction, projectile
+  // friction, position shifts, compression law): zeroed by finish_step once booked.
+  std::vector<V3> dv_contact, dv_friction, dv_pfriction, dx_contact;
+  std::vector<V3> dv_compress, sum_c;  // (only when crossings are compressible)
+  // --- The energy book's running sums (docs/MODEL.md §8), per mechanism.
+  std::vector<double> cr_u;        // per crossing: the compression law's stored energy, end of the step
+  std::vector<double> cr_stick_e;  // per crossing: the stick penalty springs' energy (pass_friction)
+  double stick_end = 0, stick_prev = 0, friction_work_cum = 0;
+  double compress_end = 0, compress_prev = 0, compress_work_cum = 0;
+  // --- Nodes the projectile pushed out this step: the surface normal (zero: not held), the
+  // impulse the yarn contact passed through them to the projectile (with the friction's and
+  // the compression's shares), their list, the nodes the projectile touched (their
+  // dv_pfriction) and a compact held flag for the hot loops.
+  std::vector<V3> held_n, held_imp, held_fric, held_comp;
+  std::vector<int> held_list, ptouch_list;
+  std::vector<std::uint8_t> held_flag;
+  std::vector<V3> sum_n, sum_f, sum_s;  // a pass's corrections summed per node (gather, finish_pass)
+  V3 proj_impulse = V3::Zero();         // the projectile contact's impulse on the projectile this step
+  // --- Elements (SPEC §1-2): apparent strain, the yarn law's strain of the last step, the
+  // Zener internal strain e_v, stress, broken flags (1: this step, 2: counted), force on
+  // node b, stored energy.
+  std::vector<Real> strain, prev_strain, ev, stress;
+  std::vector<std::uint8_t> broken_flag;
+  std::vector<V3> elem_force, bend_force;
+  std::vector<double> elem_energy;
+  // --- Crossings (SPEC §4): the tracked nearest pair (node index along warp / weft), its
+  // window ids, the stick points (-1: none), last step's normal / friction force, slip rate
+  // and gap, the normal force summed over this step's passes, the pair at the end of the last
+  // step, and flags.
+  std::vector<int> cr_kw, cr_kf;
+  std::vector<WindowIds> cr_win;
+  std::vector<double> cr_stick_w, cr_stick_f, cr_fn, cr_ft, cr_slip, cr_gap, cr_fn_step;
+  std::vector<LastPair<Real>> cr_last;
+  std::vector<std::uint8_t> cr_active, cr_sliding, cr_event;
+  // --- Projectile (modelled part): position, velocity.
+  V3 xp, vp;
+  // --- Energy at half steps (solver.h, "Energy timing"): kinetic energy of v(t + dt/2), all
+  // and the fabric's; stored energy and the cumulative terms at t and t - dt.
+  double ke_half = 0, ke_fabric_half = 0;
+  double stored_now = 0, stored_prev = 0, viscous_cum = 0, viscous_prev = 0, released_cum = 0, released_prev = 0;
+  double pfriction_cum = 0, contact_cum = 0, external_cum = 0;
+  double shift_cum = 0;      // the position shifts' work against the yarn forces (ledger shift_work_J)
+  std::vector<int> shifted;  // shift_energy: the nodes shifted this step
+  std::vector<unsigned> elem_mark, bend_mark;  // ... and the elements / springs already counted
+  unsigned mark = 0;
+  std::vector<std::pair<int, V3>> f_ext;  // constant external loads (Solver::set_external_force)
+  std::vector<Real> crimp_damp_stress;    // per element: the crimp damping's stress of the last step
+  double damping_cum = 0;
+  double balance_window[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // the slow-drift check's memory (check_balance)
+
+  // Every field, in one list for writing and reading (StateWriter / StateReader).
+  template <class Ar>
+  void io(Ar& ar) {
+    ar.mark(0x52565331);  // "RVS1"
+    ar.vec(x);
+    ar.vec(v);
+    ar.vec(f);
+    ar.vec(v_prev);
+    ar.vec(dv_contact);
+    ar.vec(dv_friction);
+    ar.vec(dv_pfriction);
+    ar.vec(dx_contact);
+    ar.vec(dv_compress);
+    ar.vec(sum_c);
+    ar.vec(cr_u);
+    ar.vec(cr_stick_e);
+    ar.pod(stick_end);
+    ar.pod(stick_prev);
+    ar.pod(friction_work_cum);
+    ar.pod(compress_end);
+    ar.pod(compress_prev);
+    ar.pod(compress_work_cum);
+    ar.vec(held_n);
+    ar.vec(held_imp);
+    ar.vec(held_fric);
+    ar.vec(held_comp);
+    ar.vec(held_list);
+    ar.vec(ptouch_list);
+    ar.vec(held_flag);
+    ar.vec(sum_n);
+    ar.vec(sum_f);
+    ar.vec(sum_s);
+    ar.pod(proj_impulse);
+    ar.vec(strain);
+    ar.vec(prev_strain);
+    ar.vec(ev);
+    ar.vec(stress);
+    ar.vec(broken_flag);
+    ar.vec(elem_force);
+    ar.vec(bend_force);
+    ar.vec(elem_energy);
+    ar.vec(cr_kw);
+    ar.vec(cr_kf);
+    ar.vec(cr_win);
+    ar.vec(cr_stick_w);
+    ar.vec(cr_stick_f);
+    ar.vec(cr_fn);
+    ar.vec(cr_ft);
+    ar.vec(cr_slip);
+    ar.vec(cr_gap);
+    ar.vec(cr_fn_step);
+    ar.vec(cr_last);
+    ar.vec(cr_active);
+    ar.vec(cr_sliding);
+    ar.vec(cr_event);
+    ar.pod(xp);
+    ar.pod(vp);
+    ar.pod(ke_half);
+    ar.pod(ke_fabric_half);
+    ar.pod(stored_now);
+    ar.pod(stored_prev);
+    ar.pod(viscous_cum);
+    ar.pod(viscous_prev);
+    ar.pod(released_cum);
+    ar.pod(released_prev);
+    ar.pod(pfriction_cum);
+    ar.pod(contact_cum);
+    ar.pod(external_cum);
+    ar.pod(shift_cum);
+    ar.vec(shifted);
+    ar.vec(elem_mark);
+    ar.vec(bend_mark);
+    ar.pod(mark);
+    ar.vec(f_ext);
+    ar.vec(crimp_damp_stress);
+    ar.pod(damping_cum);
+    ar.pod(balance_window);
+    ar.mark(0x52564532);  // "RVE2"
+  }
+
+  // FNV-1a over the bytes of the motion, the internal strains, the broken flags, the stick
+  // points and the projectile (what the state-hash probe compares: any change of a number
+  // shows in these within a few steps).
+  void hash(std::uint64_t& h) const {
+    bytes(h, x.data(), x.size() * sizeof(V3));
+    bytes(h, v.data(), v.size() * sizeof(V3));
+    bytes(h, ev.data(), ev.size() * sizeof(Real));
+    bytes(h, broken_flag.data(), broken_flag.size());
+    bytes(h, cr_stick_w.data(), cr_stick_w.size() * sizeof(double));
+    bytes(h, cr_stick_f.data(), cr_stick_f.size() * sizeof(double));
+    bytes(h, xp.data(), sizeof(V3));
+    bytes(h, vp.data(), sizeof(V3));
+  }
+  static void bytes(std::uint64_t& h, const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  }
+};
+
+}  // namespace ravel::detail
