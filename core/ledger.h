@@ -52,4 +52,58 @@ struct Ledger {
   }
 };
 
+// The energy book: the running sums each mechanism adds its energy or work to during a step
+// (in the stage that owns the mechanism), and the one place that turns them into the ledger
+// row. Central differences carry velocities at half steps and positions at whole steps, so
+// the row is at t - dt/2: kinetic energies of v(t - dt/2) exactly, stored energies and the
+// cumulative terms evaluated at whole steps as the mean of their values at t - dt and t
+// (core/solver.h, "Energy timing").
+struct EnergyBook {
+  // Kinetic energy of v(t + dt/2): all of it and the fabric's (finish_step).
+  double ke_half = 0, ke_fabric_half = 0;
+  // Stored in the elements and bending springs at t (internal_forces) and at t - dt.
+  double stored_now = 0, stored_prev = 0;
+  // Cumulative dissipation by the Zener dashpots and energy released by broken elements,
+  // at t and t - dt (internal_forces).
+  double viscous_cum = 0, viscous_prev = 0, released_cum = 0, released_prev = 0;
+  double damping_cum = 0;  // snap and crimp damping (internal_forces)
+  // Work of the corrections, cumulative (finish_step, release_held; sign: done on the system).
+  double pfriction_cum = 0, contact_cum = 0, external_cum = 0;
+  double shift_cum = 0;  // the position shifts' work against the yarn forces (shift_energy)
+  // Yarn-yarn friction: its impulses' work and the stick springs' energy at t and t - dt.
+  double friction_work_cum = 0, stick_end = 0, stick_prev = 0;
+  // The compression law: its impulses' work and its stored energy at t and t - dt.
+  double compress_work_cum = 0, compress_end = 0, compress_prev = 0;
+
+  // Before the first step: the values at t = 0 are the "previous" ones of the first row.
+  void start() {
+    compress_prev = compress_end;
+    stick_prev = stick_end;
+    stored_prev = stored_now;
+    viscous_prev = viscous_cum;
+    released_prev = released_cum;
+  }
+  // The ledger row at t - dt/2, then this step's values become the previous ones.
+  void close_row(Ledger& l) {
+    l.fabric_ke_J = ke_fabric_half;
+    l.projectile_ke_J = ke_half - ke_fabric_half;
+    l.strain_energy_J = 0.5 * (stored_prev + stored_now);
+    l.viscous_J = 0.5 * (viscous_prev + viscous_cum);
+    l.damping_J = damping_cum;
+    l.released_J = 0.5 * (released_prev + released_cum);
+    l.projectile_friction_J = pfriction_cum;
+    l.contact_loss_J = contact_cum;
+    l.shift_work_J = shift_cum;
+    l.compression_J = 0.5 * (compress_prev + compress_end);
+    // Dissipated by friction: the work its impulses took from the yarns (and the projectile)
+    // less what the stick penalty springs hold (Eq 12: a stuck contact stores K/2 e^2 and
+    // gives it back; only the rest is lost).
+    l.stick_energy_J = 0.5 * (stick_prev + stick_end);
+    l.friction_work_J = 0.0 - (friction_work_cum + l.stick_energy_J);  // (0.0 - : no negative zero)
+    l.compression_loss_J = -compress_work_cum - l.compression_J;
+    l.external_work_J = external_cum;
+    start();
+  }
+};
+
 }  // namespace ravel

@@ -211,10 +211,10 @@ void SolverT<Real>::internal_forces() {
     for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * s_.bend_force[inc_b_[k].first];
     s_.f[i] = f;
   }
-  s_.stored_now = stored + bend_stored;
-  s_.damping_cum += damp;
-  s_.viscous_cum += diss;
-  s_.released_cum += released;
+  s_.book.stored_now = stored + bend_stored;
+  s_.book.damping_cum += damp;
+  s_.book.viscous_cum += diss;
+  s_.book.released_cum += released;
   run_.max_strain = max_strain;
 }
 

@@ -3,42 +3,15 @@
 
 namespace ravel::detail {
 
-// The ledger at t - dt/2 (see the header comment): kinetic energy of v(t - dt/2), the
-// mean of stored / cumulative-dissipation values at t - dt and t.
+// The ledger at t - dt/2 (EnergyBook::close_row), and the energy-balance check on it.
 template <class Real>
 void SolverT<Real>::close_ledger_row() {
   if (run_.steps == 0) {
-    s_.compress_prev = s_.compress_end;
-    s_.stick_prev = s_.stick_end;
-    s_.stored_prev = s_.stored_now;
-    s_.viscous_prev = s_.viscous_cum;
-    s_.released_prev = s_.released_cum;
+    s_.book.start();
     return;
   }
-  Ledger& l = run_.ledger;
-  l.fabric_ke_J = s_.ke_fabric_half;
-  l.projectile_ke_J = s_.ke_half - s_.ke_fabric_half;
-  l.strain_energy_J = 0.5 * (s_.stored_prev + s_.stored_now);
-  l.viscous_J = 0.5 * (s_.viscous_prev + s_.viscous_cum);
-  l.damping_J = s_.damping_cum;
-  l.released_J = 0.5 * (s_.released_prev + s_.released_cum);
-  // Dissipated by friction: the work its impulses took from the yarns (and the projectile)
-  // less what the stick penalty springs hold (Eq 12: a stuck contact stores K/2 e^2 and
-  // gives it back; only the rest is lost).
-  l.projectile_friction_J = s_.pfriction_cum;
-  l.contact_loss_J = s_.contact_cum;
-  l.shift_work_J = s_.shift_cum;
-  l.compression_J = 0.5 * (s_.compress_prev + s_.compress_end);
-  l.stick_energy_J = 0.5 * (s_.stick_prev + s_.stick_end);
-  l.friction_work_J = 0.0 - (s_.friction_work_cum + l.stick_energy_J);  // (0.0 - : no negative zero)
-  l.compression_loss_J = -s_.compress_work_cum - l.compression_J;
-  l.external_work_J = s_.external_cum;
-  s_.stored_prev = s_.stored_now;
-  s_.viscous_prev = s_.viscous_cum;
-  s_.released_prev = s_.released_cum;
-  s_.compress_prev = s_.compress_end;
-  s_.stick_prev = s_.stick_end;
-  check_balance(l.total());
+  s_.book.close_row(run_.ledger);
+  check_balance(run_.ledger.total());
 }
 
 template <class Real>
@@ -135,14 +108,14 @@ void SolverT<Real>::finish_step() {
   s_.ptouch_list.clear();
   // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
   for (const auto& [i, F] : s_.f_ext)
-    s_.external_cum += 0.5 * double(model_.dt) * double(F.dot(s_.v_prev[i] + s_.v[i]));
-  s_.contact_cum -= w_contact;
-  s_.shift_cum -= shift_energy();
-  s_.compress_work_cum += w_compress;
-  s_.friction_work_cum += w_friction;
-  s_.pfriction_cum -= w_pfriction;
-  s_.ke_fabric_half = ke;
-  s_.ke_half = s_.ke_fabric_half + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
+    s_.book.external_cum += 0.5 * double(model_.dt) * double(F.dot(s_.v_prev[i] + s_.v[i]));
+  s_.book.contact_cum -= w_contact;
+  s_.book.shift_cum -= shift_energy();
+  s_.book.compress_work_cum += w_compress;
+  s_.book.friction_work_cum += w_friction;
+  s_.book.pfriction_cum -= w_pfriction;
+  s_.book.ke_fabric_half = ke;
+  s_.book.ke_half = s_.book.ke_fabric_half + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
   run_.time += model_.dt;
   ++run_.steps;
 }

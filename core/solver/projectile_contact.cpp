@@ -87,8 +87,8 @@ void SolverT<Real>::projectile_contact() {
     s_.xp += dt * (s_.vp - vp_old);
     // Work of the reactions on the projectile (it has no other force: v- = vp_old).
     const V3 vsum = vp_old + s_.vp;
-    s_.contact_cum -= 0.5 * Mp * double(dvp_n.dot(vsum));
-    s_.pfriction_cum -= 0.5 * Mp * double(dvp_t.dot(vsum));
+    s_.book.contact_cum -= 0.5 * Mp * double(dvp_n.dot(vsum));
+    s_.book.pfriction_cum -= 0.5 * Mp * double(dvp_t.dot(vsum));
     run_.last_contact_time = run_.time + model_.dt;
     run_.had_contact = true;
   }
@@ -132,9 +132,9 @@ void SolverT<Real>::release_held() {
   const double hm = 0.5 * model_.projectile_mass;
   const double w_all = hm * double(dvp.dot(vsum));
   const double w_f = hm * double(dv_of(imp_f).dot(vsum)), w_c = hm * double(dv_of(imp_c).dot(vsum));
-  s_.contact_cum -= w_all - w_f - w_c;
-  s_.friction_work_cum += w_f;
-  s_.compress_work_cum += w_c;
+  s_.book.contact_cum -= w_all - w_f - w_c;
+  s_.book.friction_work_cum += w_f;
+  s_.book.compress_work_cum += w_c;
   run_.projectile_force = double((s_.proj_impulse + imp).norm()) / model_.dt;
 }
 

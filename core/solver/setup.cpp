@@ -78,8 +78,8 @@ SolverT<Real>::SolverT(const Model& m, int threads)
   s_.vp = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
   set_threads(threads);
   // Initial ledger: all energy is the projectile's.
-  s_.ke_half = 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
-  run_.ledger.projectile_ke_J = s_.ke_half;
+  s_.book.ke_half = 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
+  run_.ledger.projectile_ke_J = s_.book.ke_half;
   escape_radius2_ = std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2);
 }
 

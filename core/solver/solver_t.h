@@ -99,7 +99,7 @@ class SolverT final : public Solver {
   }
   void set_projectile_velocity(const Vec3d& v) override {
     s_.vp = v.cast<Real>();
-    s_.ke_half = fabric_ke() + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
+    s_.book.ke_half = fabric_ke() + 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
   }
   void set_projectile_position(const Vec3d& x) override {
     s_.xp = x.cast<Real>();
@@ -465,7 +465,6 @@ class SolverT final : public Solver {
   std::vector<std::vector<int>> near_part_;  // the same, per thread
   std::vector<int> rec_first_, rec_last_;    // (threads) node bounds of the pass's records, running
   std::vector<CrossingImpulse> impulses_;
-  std::vector<CrossingImpulse> held_records_;  // one thread: records touching held nodes (yarn_contact)
 
   using LastPair = detail::LastPair<Real>;
   V3 pair_offset(int c, int kw, int kf) const {

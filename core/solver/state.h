@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "ledger.h"
+
 namespace ravel::detail {
 
 // The node ids of a crossing's window around its tracked pair: what a window is loaded from.
@@ -46,11 +48,10 @@ struct State {
   // friction, position shifts, compression law): zeroed by finish_step once booked.
   std::vector<V3> dv_contact, dv_friction, dv_pfriction, dx_contact;
   std::vector<V3> dv_compress, sum_c;  // (only when crossings are compressible)
-  // --- The energy book's running sums (docs/MODEL.md §8), per mechanism.
+  // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
+  EnergyBook book;
   std::vector<double> cr_u;        // per crossing: the compression law's stored energy, end of the step
   std::vector<double> cr_stick_e;  // per crossing: the stick penalty springs' energy (pass_friction)
-  double stick_end = 0, stick_prev = 0, friction_work_cum = 0;
-  double compress_end = 0, compress_prev = 0, compress_work_cum = 0;
   // --- Nodes the projectile pushed out this step: the surface normal (zero: not held), the
   // impulse the yarn contact passed through them to the projectile (with the friction's and
   // the compression's shares), their list, the nodes the projectile touched (their
@@ -87,9 +88,8 @@ struct State {
   std::vector<int> shifted;  // shift_energy: the nodes shifted this step
   std::vector<unsigned> elem_mark, bend_mark;  // ... and the elements / springs already counted
   unsigned mark = 0;
-  std::vector<std::pair<int, V3>> f_ext;  // constant external loads (Solver::set_external_force)
-  std::vector<Real> crimp_damp_stress;    // per element: the crimp damping's stress of the last step
-  double damping_cum = 0;
+  std::vector<std::pair<int, V3>> f_ext;                // constant external loads (Solver::set_external_force)
+  std::vector<Real> crimp_damp_stress;                  // per element: the crimp damping's stress of the last step
   double balance_window[8] = {0, 0, 0, 0, 0, 0, 0, 0};  // the slow-drift check's memory (check_balance)
 
   // Every field, in one list for writing and reading (StateWriter / StateReader).
@@ -106,14 +106,9 @@ struct State {
     ar.vec(dx_contact);
     ar.vec(dv_compress);
     ar.vec(sum_c);
+    ar.pod(book);
     ar.vec(cr_u);
     ar.vec(cr_stick_e);
-    ar.pod(stick_end);
-    ar.pod(stick_prev);
-    ar.pod(friction_work_cum);
-    ar.pod(compress_end);
-    ar.pod(compress_prev);
-    ar.pod(compress_work_cum);
     ar.vec(held_n);
     ar.vec(held_imp);
     ar.vec(held_fric);
@@ -149,25 +144,12 @@ struct State {
     ar.vec(cr_event);
     ar.pod(xp);
     ar.pod(vp);
-    ar.pod(ke_half);
-    ar.pod(ke_fabric_half);
-    ar.pod(stored_now);
-    ar.pod(stored_prev);
-    ar.pod(viscous_cum);
-    ar.pod(viscous_prev);
-    ar.pod(released_cum);
-    ar.pod(released_prev);
-    ar.pod(pfriction_cum);
-    ar.pod(contact_cum);
-    ar.pod(external_cum);
-    ar.pod(shift_cum);
     ar.vec(shifted);
     ar.vec(elem_mark);
     ar.vec(bend_mark);
     ar.pod(mark);
     ar.vec(f_ext);
     ar.vec(crimp_damp_stress);
-    ar.pod(damping_cum);
     ar.pod(balance_window);
     ar.mark(0x52564532);  // "RVE2"
   }
