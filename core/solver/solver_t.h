@@ -164,8 +164,10 @@ class SolverT final : public Solver {
   void hash_into(std::uint64_t& h) const override;
 
  private:
+  // ---------------------------------------------------------------- setup.cpp
   void build_incidence();
 
+  // ------------------------------------------------------ internal_forces.cpp
   bool element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
                    double& released, double& max_strain, double& damp);
 
@@ -193,9 +195,11 @@ class SolverT final : public Solver {
 
   void internal_forces();
 
+  // --------------------------------------------------------------- ledger.cpp
   void close_ledger_row();
   static constexpr long kBalanceWindow = 64;  // steps per window of the drift/instability test
 
+  // ------------------------------------------------------------ integrate.cpp
   void integrate();
 
   // Zero the components of a node's velocity / displacement change along its fixed axes
@@ -206,7 +210,7 @@ class SolverT final : public Solver {
     if (fx & fix_z) v.z() = 0;
   }
 
-  // ------------------------------------------------------------ yarn contact (Eq 5-17)
+  // ------------------------------------------ yarn_contact.cpp: yarn contact (Eq 5-17)
   int ynode(int yarn, int k) const {
     return model_.yarn_node(yarn, k);
   }
@@ -398,17 +402,17 @@ class SolverT final : public Solver {
 
   void pass_friction(int c, Real alpha, bool last, const FrictionSetup& s, CrossingImpulse& r);
 
+  // --------------------------------------------------- projectile_contact.cpp
   void projectile_contact();
-
-  double fabric_ke() const;
-
   void release_held();
 
-  // The interpenetration left at the end of a step (after every correction), sampled every
-  // kPenetrationCheckEvery steps: what the contact algorithm failed to resolve.
+  // (yarn_contact.cpp) The interpenetration left at the end of a step (after every correction),
+  // sampled every kPenetrationCheckEvery steps: what the contact algorithm failed to resolve.
   static constexpr int kPenetrationCheckEvery = 8;
   void residual_penetration();
 
+  // --------------------------------------------------------------- ledger.cpp
+  double fabric_ke() const;
   double shift_energy();
   double element_energy_at(int e, Real len) const;
   // A bending spring's energy with node positions from pos (internal_forces' law; 0 when
