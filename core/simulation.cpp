@@ -82,15 +82,11 @@ struct Simulation::Impl {
   long sample_every = 1;
   double worst_balance = 0;
   double perforation_time = -1;
-  double last_attached_touch = -1;
-  int extensions = 0;   // times extend_to reopened the run
-  double end_time = 0;  // the model's, or later when a study extends an undecided run (extend_to)  // last check that
-                        // found a node attached to the clamps on the projectile
+  double last_attached_touch = -1;  // last check that found a node attached to the clamps on the projectile
+  int extensions = 0;               // times extend_to reopened the run
+  double end_time = 0;              // the model's, or later when a study extends an undecided run (extend_to)
   double wall_s = 0;
   std::vector<std::string> warnings;
-  std::string fault_cause;
-  long fault_step = -1;
-  double fault_time = -1;
   long search_lost_before = 0;  // diagnostics().skipped_nodes after the previous step
   double slow_since = -1;       // time from which the projectile has been below kCaughtSpeed V0 (-1: not)
 
@@ -311,12 +307,7 @@ struct Simulation::Impl {
     solver->fault(cause, why);
     stop_diverged();
   }
-  void stop_diverged() {
-    fault_cause = solver->divergence_cause();
-    fault_step = solver->divergence_step();
-    fault_time = solver->divergence_time();
-    finish(RunStatus::diverged, EndReason::diverged, solver->divergence() + ". " + advice());
-  }
+  void stop_diverged() { finish(RunStatus::diverged, EndReason::diverged, solver->divergence() + ". " + advice()); }
 
   std::string advice() const {
     const Model& m = model();
@@ -434,9 +425,6 @@ void impl_io(Ar& ar, I& s) {
   ar.pod(s.end_time);
   ar.pod(s.wall_s);
   ar.strings(s.warnings);
-  ar.str(s.fault_cause);
-  ar.pod(s.fault_step);
-  ar.pod(s.fault_time);
   ar.pod(s.search_lost_before);
   ar.pod(s.slow_since);
 }
@@ -513,9 +501,9 @@ Summary Simulation::summary() const {
   s.status = I.status;
   s.end_reason = I.reason;
   s.diagnosis = I.diagnosis;
-  s.divergence_cause = I.fault_cause;
-  s.divergence_step = I.fault_step;
-  s.divergence_time_s = I.fault_time;
+  s.divergence_cause = I.solver->divergence_cause();
+  s.divergence_step = I.solver->divergence_step();
+  s.divergence_time_s = I.solver->divergence_time();
   s.perforated = I.reason == EndReason::perforated;
   s.impact_velocity_mps = m.impact_velocity;
   const double vf = I.forward_velocity();

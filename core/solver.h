@@ -188,12 +188,6 @@ class Solver {
  protected:
   explicit Solver(Model m) : model_(std::move(m)) {}
   virtual void hash_into(std::uint64_t& h) const = 0;
-  // The base class's part of the state.
-  template <class Ar>
-  void base_io(Ar& ar) {
-    run_.io(ar);
-  }
-
   Model model_;
   RunState run_;
   double max_balance_error_ = 0.05;

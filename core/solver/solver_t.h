@@ -157,7 +157,7 @@ class SolverT final : public Solver {
   // The whole dynamic state: the base class's RunState, then State (core/solver/state.h).
   template <class Ar>
   void state_io(Ar& ar) {
-    base_io(ar);
+    run_.io(ar);
     s_.io(ar);
   }
 
@@ -353,12 +353,10 @@ class SolverT final : public Solver {
 
   void yarn_contact();
 
-  // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums
-  // (kSums), applied once per node by finish_pass; nodes the projectile holds take each
-  // correction separately (kHeld), as the hold projects out the part pushing into the
-  // projectile. Returns whether the record touches a held node.
-  static constexpr int kSums = 1, kHeld = 2;
-  bool gather(const CrossingImpulse& r, int lo, int hi, int what);
+  // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums,
+  // applied once per node by finish_pass; nodes the projectile holds take each correction
+  // separately, as the hold projects out the part pushing into the projectile.
+  void gather(const CrossingImpulse& r, int lo, int hi);
 
   void finish_pass(int lo, int hi);
 

@@ -398,7 +398,7 @@ void SolverT<Real>::yarn_contact() {
       my_share(model_.node_count, lo, hi, t);
       const int c_first = int(std::lower_bound(rec_last_.begin(), rec_last_.end(), lo) - rec_last_.begin());
       const int c_end = int(std::lower_bound(rec_first_.begin(), rec_first_.end(), hi) - rec_first_.begin());
-      for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi, kSums | kHeld);
+      for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi);
       finish_pass(lo, hi);
     }
   }
@@ -453,8 +453,8 @@ void SolverT<Real>::yarn_contact() {
 }
 
 template <class Real>
-RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi, int what) {
-  if (!r.any_held && (what & kSums)) {
+RAVEL_INLINE void SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi) {
+  if (!r.any_held) {
     // The common case, no held node: every weight on a node in [lo, hi) goes to the sums.
     const unsigned span = unsigned(hi - lo);
     auto each = [lo, span](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
@@ -465,20 +465,17 @@ RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
     if (r.has_f) each(4, r.fnode, r.fw, r.F, s_.sum_f.data());
     if (r.has_s) each(6, r.node, r.w, r.S, s_.sum_s.data());
     if (r.has_c) each(6, r.node, r.w, r.C, s_.sum_c.data());
-    return false;
+    return;
   }
-  bool held = false;
   // One kind of correction: weights w on nodes, times the vector q.
   auto each = [&](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum, auto&& take_held) {
     for (int k = 0; k < count; ++k) {
       const int i = nodes[k];
       if (unsigned(i - lo) >= unsigned(hi - lo) || w[k] == Real(0)) continue;  // i in [lo, hi), -1 not
-      if (s_.held_flag[i]) {
-        held = true;
-        if (what & kHeld) take_held(i, w[k] * q);
-      } else if (what & kSums) {
+      if (s_.held_flag[i])
+        take_held(i, w[k] * q);
+      else
         sum[i] += w[k] * q;
-      }
     }
   };
   if (r.has_n)
@@ -491,7 +488,6 @@ RAVEL_INLINE bool SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
   if (r.has_c)
     each(6, r.node, r.w, r.C, s_.sum_c,
          [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_compress, r.hold, &s_.held_comp); });
-  return held;
 }
 
 // Apply the pass's gathered sums to the nodes in [lo, hi).
