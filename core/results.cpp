@@ -1,5 +1,7 @@
 #include "results.h"
 
+#include "state_io.h"
+
 #include <cstdint>
 
 #include <cctype>
@@ -154,8 +156,8 @@ std::string safe_file_name(const std::string& text) {
 }
 
 std::string short_hash(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const unsigned char ch : text) h = (h ^ ch) * 1099511628211ull;
+  std::uint64_t h = kFnvBasis;
+  fnv1a(h, text.data(), text.size());
   char b[17];
   std::snprintf(b, sizeof b, "%08x", unsigned((h >> 32) ^ h));
   return b;
@@ -181,7 +183,7 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["residual_velocity_mps"] = outcome(s.residual_velocity_mps);
   j["energy_absorbed_J"] = outcome(s.energy_absorbed_J);
   j["perforation_time_s"] = s.perforation_time_s >= 0 && !undefined ? nlohmann::ordered_json(s.perforation_time_s)
-                                                                     : nlohmann::ordered_json(nullptr);
+                                                                    : nlohmann::ordered_json(nullptr);
   j["energy_balance_error"] = s.energy_balance_error;
   j["friction_work_J"] = outcome(s.friction_work_J);
   j["yarn_friction"] = scene.yarn.friction;

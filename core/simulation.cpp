@@ -441,8 +441,8 @@ std::string Simulation::checkpoint_fingerprint() const {
 // FNV-1a over the checkpoint's bytes, appended to it: a damaged checkpoint is refused before
 // anything in it is believed (array sizes, node and element indices).
 static std::uint64_t checkpoint_sum(const char* p, std::size_t n) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(p[i])) * 1099511628211ull;
+  std::uint64_t h = kFnvBasis;
+  fnv1a(h, p, n);
   return h;
 }
 

@@ -20,6 +20,13 @@
 
 namespace ravel {
 
+// FNV-1a over raw bytes: the state hash, the checkpoint's checksum, short names from text.
+constexpr std::uint64_t kFnvBasis = 1469598103934665603ull;
+inline void fnv1a(std::uint64_t& h, const void* data, std::size_t n) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+}
+
 class StateWriter {
  public:
   template <class T>

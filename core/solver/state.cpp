@@ -4,7 +4,7 @@
 namespace ravel {
 
 std::uint64_t Solver::state_hash() const {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a offset basis
+  std::uint64_t h = kFnvBasis;
   hash_into(h);
   return h;
 }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "ledger.h"
+#include "state_io.h"
 
 namespace ravel::detail {
 
@@ -158,21 +159,14 @@ struct State {
   // points and the projectile (what the state-hash probe compares: any change of a number
   // shows in these within a few steps).
   void hash(std::uint64_t& h) const {
-    bytes(h, x.data(), x.size() * sizeof(V3));
-    bytes(h, v.data(), v.size() * sizeof(V3));
-    bytes(h, ev.data(), ev.size() * sizeof(Real));
-    bytes(h, broken_flag.data(), broken_flag.size());
-    bytes(h, cr_stick_w.data(), cr_stick_w.size() * sizeof(double));
-    bytes(h, cr_stick_f.data(), cr_stick_f.size() * sizeof(double));
-    bytes(h, xp.data(), sizeof(V3));
-    bytes(h, vp.data(), sizeof(V3));
-  }
-  static void bytes(std::uint64_t& h, const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= p[i];
-      h *= 1099511628211ull;
-    }
+    fnv1a(h, x.data(), x.size() * sizeof(V3));
+    fnv1a(h, v.data(), v.size() * sizeof(V3));
+    fnv1a(h, ev.data(), ev.size() * sizeof(Real));
+    fnv1a(h, broken_flag.data(), broken_flag.size());
+    fnv1a(h, cr_stick_w.data(), cr_stick_w.size() * sizeof(double));
+    fnv1a(h, cr_stick_f.data(), cr_stick_f.size() * sizeof(double));
+    fnv1a(h, xp.data(), sizeof(V3));
+    fnv1a(h, vp.data(), sizeof(V3));
   }
 };
 
