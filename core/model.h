@@ -79,7 +79,7 @@ struct Model {
   // --- pin-jointed crimp stage (docs/MODEL.md §1): an element's apparent strain e = len / L0 - 1
   // takes up the crimp e_c = sqrt(L0^2 + L1^2) / L0 - 1 in a toe whose stiffness rises from
   // crimp_fraction (r) of the modulus to all of it over [0, 2 crimp_width], crimp_width = e_c
-  // (SolverT::crimp_stage). crimp_strain = 0: no crimp stage (sliding and single-yarn models).
+  // (crimp_stage in core/solver/stage.h). crimp_strain = 0: no crimp stage (sliding and single-yarn models).
   double crimp_strain = 0, crimp_fraction = 0, crimp_width = 0;
   double crimp_damping_beta = 0;  // s: beta of the pin-jointed stretch damping (yarn.crimp_damping x L / c)
 

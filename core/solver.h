@@ -2,8 +2,9 @@
 //
 // Why this order (paper §2-4, SPEC §3): Eq 1-2 integrate the free motion first, then the
 // contact algorithms correct the *predicted* state, so that the state at the end of each
-// step is free of interpenetration. step() runs exactly these, each in its own file under
-// core/solver/:
+// step is free of interpenetration. step() runs exactly these, each a free function of
+// (model, state, run state, context) declared in core/solver/stage.h and defined in its own
+// file under core/solver/:
 //
 //   internal_forces       element strain -> Zener/elastic stress, bending springs, failure
 //                         (internal_forces.cpp): the forces of Eq 1 from x(t)
@@ -19,7 +20,7 @@
 //                         predicted state (yarn_contact.cpp); last, so the yarn-yarn state is
 //                         resolved at the end of every step
 //   release_held          the yarn contact's push on nodes resting on the projectile, passed
-//                         to the projectile (projectile_contact.cpp)
+//                         to the projectile (hold.cpp; the hold's whole rule is in hold.h)
 //   residual_penetration  every 8th step, the interpenetration left (a diagnostic,
 //                         yarn_contact.cpp)
 //   finish_step           kinetic energy of the half-step velocities, the work of this step's

@@ -1,13 +1,30 @@
 // Stage internal_forces (Eq 3, 23-25): element strain -> stress, failure, bending, nodal forces.
-#include "solver/solver_t.h"
+#include "solver/simd/element_lanes.h"
+#include "solver/stage.h"
 
 namespace ravel::detail {
+namespace {
+
+// The stage's inputs, bound for its helpers.
+template <class Real>
+struct InternalForces {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+  static constexpr int kBatch = lanes::kWidth;
+  const Model& model_;
+  State<Real>& s_;
+  RunState& run_;
+  Context<Real>& ctx_;
+
+  bool element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
+                   double& released, double& max_strain, double& damp);
+  void run();
+};
 
 // One element's strain, stress update, failure and force (the one-element code the lanes mirror).
 // Returns whether the element failed in this step.
 template <class Real>
-inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail, bool breakable, double& stored,
-                                       double& diss, double& released, double& max_strain, double& damp) {
+inline bool InternalForces<Real>::element_one(int e, bool zener, double E, double fail, bool breakable, double& stored,
+                                              double& diss, double& released, double& max_strain, double& damp) {
   if (s_.broken_flag[e]) {
     s_.elem_force[e].setZero();
     return false;
@@ -22,14 +39,14 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   // sigma A g'(e), the derivative of its stored energy.
   Real mat = eps, dg = Real(1);
   const double apparent = double(eps);  // against L0 (crimp_stage turns eps into the yarn's own strain)
-  if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
+  if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
   const double mat_prev = double(s_.prev_strain[e]);
   double sig, u, dd = 0;
   if (zener) {
-    const ZenerStep zs = zener_.step(double(s_.prev_strain[e]), double(mat), double(s_.ev[e]));
+    const ZenerStep zs = ctx_.zener.step(double(s_.prev_strain[e]), double(mat), double(s_.ev[e]));
     s_.ev[e] = Real(zs.ev);
     sig = zs.stress;
-    u = zener_stored(zener_.c, sig, zs.ev) * vol;
+    u = zener_stored(ctx_.zener.c, sig, zs.ev) * vol;
     dd = zs.dissipated * vol;
   } else {
     sig = mat > 0 ? E * double(mat) : 0.0;
@@ -39,9 +56,9 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   // taut its stress gains beta E_inst times its strain rate, never below zero; the work is
   // booked as damping_J. Elements that stay taut (the waves) are not damped.
   double sig_total = sig;
-  if (sig > 0 && damping_k_ > 0 && s_.stress[e] == Real(0)) {
+  if (sig > 0 && ctx_.damping_k > 0 && s_.stress[e] == Real(0)) {
     const double de = double(mat) - mat_prev;
-    sig_total = std::max(0.0, sig + damping_k_ * de * zener_.inv_dt);
+    sig_total = std::max(0.0, sig + ctx_.damping_k * de * ctx_.zener.inv_dt);
     damp += (sig_total - sig) * de * vol;
   }
   // Crimp damping (yarn.crimp_damping, pin-jointed only, docs/MODEL.md §1): a taut element's
@@ -51,12 +68,12 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
   // step's stretch at the mean of the damping stress at its two ends (the trapezoid; booking
   // the end-of-step stress alone made the ledger error first order in dt).
   double sig_force = sig_total * double(dg);
-  if (crimp_damping_k_ > 0) {
+  if (ctx_.crimp_damping_k > 0) {
     // s_.strain[e] still holds last step's own strain: its apparent strain a step ago.
     const double de = apparent - ((1 + double(s_.strain[e])) * (1 + model_.crimp_strain) - 1);
     double extra = 0;
     if (sig > 0) {
-      const double f = std::max(0.0, sig_force + crimp_damping_k_ * de * zener_.inv_dt);
+      const double f = std::max(0.0, sig_force + ctx_.crimp_damping_k * de * ctx_.zener.inv_dt);
       extra = f - sig_force;
       sig_force = f;
     }
@@ -79,7 +96,7 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
     s_.broken_flag[e] = 1;
     released += s_.elem_energy[e] + 0.5 * double(s_.stress[e]) * vol * (double(mat) - mat_prev);
     s_.stress[e] = 0;
-    if (crimp_damping_k_ > 0) s_.crimp_damp_stress[e] = 0;
+    if (ctx_.crimp_damping_k > 0) s_.crimp_damp_stress[e] = 0;
     s_.elem_force[e].setZero();
     return true;
   }
@@ -96,7 +113,7 @@ inline bool SolverT<Real>::element_one(int e, bool zener, double E, double fail,
 // Element strain from positions, constitutive update, failure, element force vectors,
 // bending springs, then gather into nodal forces.
 template <class Real>
-void SolverT<Real>::internal_forces() {
+void InternalForces<Real>::run() {
   const int ne = model_.element_count;
   const bool zener = model_.material == Material::zener;
   const double E = model_.modulus_inst;
@@ -107,10 +124,10 @@ void SolverT<Real>::internal_forces() {
   // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
   // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
   // taken in element order either way.
-  const bool use_lanes = zener && lanes_on() && model_.crimp_strain == 0;
+  const bool use_lanes = zener && ctx_.simd && model_.crimp_strain == 0;
   const int ng = (ne + kBatch - 1) / kBatch;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : stored, diss, released, nbroke, damp) \
-  reduction(max : max_strain) if (threads_ > 1)
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : stored, diss, released, nbroke, damp) \
+  reduction(max : max_strain) if (ctx_.threads > 1)
   for (int grp = 0; grp < ng; ++grp) {
     const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
     if constexpr (std::is_same_v<Real, double>) {
@@ -123,12 +140,12 @@ void SolverT<Real>::internal_forces() {
         b.b = &model_.elem_b[e0];
         b.rest = &model_.elem_rest[e0];
         b.area = &model_.elem_area[e0];
-        b.k1 = zener_.c.k1, b.k2 = zener_.c.k2, b.mu = zener_.c.mu;
-        b.dt = zener_.dt, b.inv_dt = zener_.inv_dt, b.lam = zener_.lam, b.g = zener_.g;
-        b.decay = zener_.decay, b.slack_decay = zener_.slack_decay;
+        b.k1 = ctx_.zener.c.k1, b.k2 = ctx_.zener.c.k2, b.mu = ctx_.zener.c.mu;
+        b.dt = ctx_.zener.dt, b.inv_dt = ctx_.zener.inv_dt, b.lam = ctx_.zener.lam, b.g = ctx_.zener.g;
+        b.decay = ctx_.zener.decay, b.slack_decay = ctx_.zener.slack_decay;
         b.fail = fail;
         b.breakable = breakable;
-        b.damping_k = damping_k_;
+        b.damping_k = ctx_.damping_k;
         b.prev_strain = &s_.prev_strain[e0];
         b.ev = &s_.ev[e0];
         b.strain = &s_.strain[e0];
@@ -161,7 +178,7 @@ void SolverT<Real>::internal_forces() {
   // Bending: compression-only springs between midpoints of adjoining elements.
   const int nbend = int(model_.bend_k.size());
   double bend_stored = 0;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : bend_stored) if (threads_ > 1)
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored) if (ctx_.threads > 1)
   for (int s = 0; s < nbend; ++s) {
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
     if (s_.broken_flag[e1] || s_.broken_flag[e2]) {
@@ -204,11 +221,13 @@ void SolverT<Real>::internal_forces() {
   }
   // Gather.
   const int n = model_.node_count;
-#pragma omp parallel for num_threads(threads_) schedule(static) if (threads_ > 1)
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     V3 f = V3::Zero();
-    for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) f += inc_e_[k].second * s_.elem_force[inc_e_[k].first];
-    for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) f += inc_b_[k].second * s_.bend_force[inc_b_[k].first];
+    for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k)
+      f += ctx_.inc_e[k].second * s_.elem_force[ctx_.inc_e[k].first];
+    for (int k = ctx_.inc_b_off[i]; k < ctx_.inc_b_off[i + 1]; ++k)
+      f += ctx_.inc_b[k].second * s_.bend_force[ctx_.inc_b[k].first];
     s_.f[i] = f;
   }
   s_.book.stored_now = stored + bend_stored;
@@ -218,8 +237,15 @@ void SolverT<Real>::internal_forces() {
   run_.max_strain = max_strain;
 }
 
+}  // namespace
+
+template <class Real>
+void internal_forces(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx) {
+  InternalForces<Real>{model, s, run, ctx}.run();
+}
+
 // The two precisions (solver.h: Precision).
-template void SolverT<float>::internal_forces();
-template void SolverT<double>::internal_forces();
+template void internal_forces(const Model&, State<float>&, RunState&, Context<float>&);
+template void internal_forces(const Model&, State<double>&, RunState&, Context<double>&);
 
 }  // namespace ravel::detail

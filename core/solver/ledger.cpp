@@ -1,23 +1,58 @@
 // The energy book (docs/MODEL.md §3, §8): the ledger row at t - dt/2 and the end-of-step sums.
-#include "solver/solver_t.h"
+#include "solver/stage.h"
 
 namespace ravel::detail {
+namespace {
+
+// The stage's inputs, bound for its helpers.
+template <class Real>
+struct Book {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+  const Model& model_;
+  State<Real>& s_;
+  RunState& run_;
+  const Context<Real>& ctx_;
+
+  double shift_energy();
+  double element_energy_at(int e, Real len) const;
+  // A bending spring's energy with node positions from pos (internal_forces' law; 0 when
+  // either element is broken).
+  template <class Pos>
+  double bend_energy_at(int sp, Pos&& pos) const {
+    const int e1 = model_.bend_e1[sp], e2 = model_.bend_e2[sp];
+    if (s_.broken_flag[e1] || s_.broken_flag[e2]) return 0;
+    const double k = model_.bend_k[sp], r = model_.bend_rest[sp];
+    if (const int ax = model_.bend_mirror[sp]; ax >= 0) {
+      const double mc = 0.5 * double(pos(model_.elem_a[e1])[ax] + pos(model_.elem_b[e1])[ax]);
+      const double comp = r - 2 * std::abs(mc);
+      return comp > 0 ? 0.25 * k * comp * comp : 0.0;
+    }
+    const V3 m1 = Real(0.5) * (pos(model_.elem_a[e1]) + pos(model_.elem_b[e1]));
+    const V3 m2 = Real(0.5) * (pos(model_.elem_a[e2]) + pos(model_.elem_b[e2]));
+    const double sl = double((m2 - m1).norm());
+    if (sl >= r) return 0;
+    return sl >= 0.5 * r ? 0.5 * k * (r - sl) * (r - sl) : 0.25 * k * r * r - 0.5 * k * sl * sl;
+  }
+  void finish_step();
+};
+
+}  // namespace
 
 // The ledger at t - dt/2 (EnergyBook::close_row), and the energy-balance check on it.
 template <class Real>
-void SolverT<Real>::close_ledger_row() {
-  if (run_.steps == 0) {
-    s_.book.start();
+void close_ledger_row(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx) {
+  if (run.steps == 0) {
+    s.book.start();
     return;
   }
-  s_.book.close_row(run_.ledger);
-  check_balance(run_.ledger.total());
+  s.book.close_row(run.ledger);
+  check_balance(model, s, run, ctx.max_balance_error, run.ledger.total());
 }
 
 template <class Real>
-double SolverT<Real>::fabric_ke() const {
+double fabric_ke(const Model& model, const State<Real>& s) {
   double ke = 0;
-  for (int i = 0; i < model_.node_count; ++i) ke += 0.5 * model_.mass[i] * double(s_.v[i].squaredNorm());
+  for (int i = 0; i < model.node_count; ++i) ke += 0.5 * model.mass[i] * double(s.v[i].squaredNorm());
   return ke;
 }
 
@@ -30,7 +65,7 @@ double SolverT<Real>::fabric_ke() const {
 // 20 % of the impact energy created over 1.4-3.6 ms of low-friction runs near the limit,
 // where whipping yarn ends were shifted tens of um per step at 200 m/s.)
 template <class Real>
-RAVEL_INLINE double SolverT<Real>::shift_energy() {
+RAVEL_INLINE double Book<Real>::shift_energy() {
   s_.shifted.clear();
   for (int i = 0; i < model_.node_count; ++i)
     if (s_.dx_contact[i].x() != Real(0) || s_.dx_contact[i].y() != Real(0) || s_.dx_contact[i].z() != Real(0))
@@ -45,15 +80,15 @@ RAVEL_INLINE double SolverT<Real>::shift_energy() {
   auto before = [&](int i) { return V3(s_.x[i] - s_.dx_contact[i]); };
   double du = 0;
   for (const int i : s_.shifted) {
-    for (int k = inc_e_off_[i]; k < inc_e_off_[i + 1]; ++k) {
-      const int e = inc_e_[k].first;
+    for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k) {
+      const int e = ctx_.inc_e[k].first;
       if (s_.elem_mark[e] == s_.mark || s_.broken_flag[e]) continue;
       s_.elem_mark[e] = s_.mark;
       const int a = model_.elem_a[e], b = model_.elem_b[e];
       du += element_energy_at(e, (s_.x[b] - s_.x[a]).norm()) - element_energy_at(e, (before(b) - before(a)).norm());
     }
-    for (int k = inc_b_off_[i]; k < inc_b_off_[i + 1]; ++k) {
-      const int sp = inc_b_[k].first;
+    for (int k = ctx_.inc_b_off[i]; k < ctx_.inc_b_off[i + 1]; ++k) {
+      const int sp = ctx_.inc_b[k].first;
       if (s_.bend_mark[sp] == s_.mark) continue;
       s_.bend_mark[sp] = s_.mark;
       du += bend_energy_at(sp, [&](int n) { return s_.x[n]; }) - bend_energy_at(sp, before);
@@ -64,13 +99,13 @@ RAVEL_INLINE double SolverT<Real>::shift_energy() {
 
 // An element's stored energy at length len with its current internal strain.
 template <class Real>
-inline double SolverT<Real>::element_energy_at(int e, Real len) const {
+inline double Book<Real>::element_energy_at(int e, Real len) const {
   const double rest = model_.elem_rest[e], vol = model_.elem_area[e] * rest;
   Real eps = len / Real(rest) - Real(1), mat = eps, dg = Real(1);
-  if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
+  if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
   if (model_.material == Material::zener) {
-    const double sig = std::max(0.0, zener_.c.k1 * (double(mat) - double(s_.ev[e])));
-    return zener_stored(zener_.c, sig, double(s_.ev[e])) * vol;
+    const double sig = std::max(0.0, ctx_.zener.c.k1 * (double(mat) - double(s_.ev[e])));
+    return zener_stored(ctx_.zener.c, sig, double(s_.ev[e])) * vol;
   }
   const double sig = std::max(0.0, model_.modulus_inst * double(mat));
   return sig * sig / (2 * model_.modulus_inst) * vol;
@@ -83,10 +118,10 @@ inline double SolverT<Real>::element_energy_at(int e, Real len) const {
 // its work is m dv . (v- + v+) / 2. (Booking the bare kinetic-energy change of each
 // correction instead would count, every step, energy a resting contact never takes.)
 template <class Real>
-void SolverT<Real>::finish_step() {
+void Book<Real>::finish_step() {
   double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0, w_compress = 0;
   const int n = model_.node_count;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (threads_ > 1)
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     const double hm = 0.5 * model_.mass[i];
     ke += hm * double(s_.v[i].squaredNorm());
@@ -95,7 +130,7 @@ void SolverT<Real>::finish_step() {
     w_friction += hm * double(s_.dv_friction[i].dot(vsum));
     s_.dv_contact[i].setZero();  // ready for the next step's corrections
     s_.dv_friction[i].setZero();
-    if (compressible_) {
+    if (ctx_.compressible) {
       w_compress += hm * double(s_.dv_compress[i].dot(vsum));
       s_.dv_compress[i].setZero();
     }
@@ -120,12 +155,17 @@ void SolverT<Real>::finish_step() {
   ++run_.steps;
 }
 
+template <class Real>
+void finish_step(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx) {
+  Book<Real>{model, s, run, ctx}.finish_step();
+}
+
 // The two precisions (solver.h: Precision).
-template void SolverT<float>::close_ledger_row();
-template void SolverT<double>::close_ledger_row();
-template double SolverT<float>::fabric_ke() const;
-template double SolverT<double>::fabric_ke() const;
-template void SolverT<float>::finish_step();
-template void SolverT<double>::finish_step();
+template void close_ledger_row(const Model&, State<float>&, RunState&, const Context<float>&);
+template void close_ledger_row(const Model&, State<double>&, RunState&, const Context<double>&);
+template double fabric_ke(const Model&, const State<float>&);
+template double fabric_ke(const Model&, const State<double>&);
+template void finish_step(const Model&, State<float>&, RunState&, const Context<float>&);
+template void finish_step(const Model&, State<double>&, RunState&, const Context<double>&);
 
 }  // namespace ravel::detail

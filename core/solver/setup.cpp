@@ -1,11 +1,13 @@
-// SolverT construction: the state from the model, the node incidence lists; make_solver.
+// Set-up: the initial State of a model, the Context (node incidence lists, material
+// constants), the SolverT that owns both, and make_solver.
 #include "solver/solver_t.h"
 
 namespace ravel::detail {
 
 template <class Real>
-SolverT<Real>::SolverT(const Model& m, int threads)
-    : Solver(m), zener_(ZenerConstants{m.k1 > 0 ? m.k1 : 1, m.k2 > 0 ? m.k2 : 1, m.damping > 0 ? m.damping : 1}, m.dt) {
+State<Real> initial_state(const Model& model_, RunState& run_) {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+  State<Real> s_;
   const int n = model_.node_count, ne = model_.element_count;
   s_.x.resize(n);
   s_.v.resize(n);
@@ -13,8 +15,7 @@ SolverT<Real>::SolverT(const Model& m, int threads)
   s_.v_prev.assign(n, V3::Zero());
   s_.dv_contact.assign(n, V3::Zero());
   s_.dv_friction.assign(n, V3::Zero());
-  compressible_ = model_.compression != CrossingCompression::rigid;
-  if (compressible_) {
+  if (model_.compression != CrossingCompression::rigid) {
     s_.dv_compress.assign(n, V3::Zero());
     s_.sum_c.assign(n, V3::Zero());
   }
@@ -37,7 +38,7 @@ SolverT<Real>::SolverT(const Model& m, int threads)
   s_.prev_strain.assign(ne, Real(0));
   s_.ev.assign(ne, Real(0));
   s_.stress.assign(ne, Real(0));
-  s_.crimp_damp_stress.assign(crimp_damping_k_ > 0 ? ne : 0, Real(0));
+  s_.crimp_damp_stress.assign(model_.crimp_damping_beta * model_.modulus_inst > 0 ? ne : 0, Real(0));
   s_.broken_flag.assign(ne, 0);
   s_.elem_force.assign(ne, V3::Zero());
   s_.elem_energy.assign(ne, 0.0);
@@ -47,11 +48,10 @@ SolverT<Real>::SolverT(const Model& m, int threads)
     const Real len = (s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]]).norm();
     Real eps = len / Real(model_.elem_rest[e]) - Real(1), mat = eps,
          dg = Real(1);  // (eps: the yarn's own strain after crimp_stage)
-    if (model_.crimp_strain > 0) crimp_stage(eps, mat, dg);
+    if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
     s_.strain[e] = eps;
     s_.prev_strain[e] = mat;
   }
-  build_incidence();
   const int nc = int(model_.crossings.size());
   s_.cr_kw.resize(nc);
   s_.cr_kf.resize(nc);
@@ -72,22 +72,35 @@ SolverT<Real>::SolverT(const Model& m, int threads)
   for (int c = 0; c < nc; ++c) {
     s_.cr_kw[c] = model_.crossings[c].warp_node;
     s_.cr_kf[c] = model_.crossings[c].weft_node;
-    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(c, s_.cr_kw[c], s_.cr_kf[c])};
+    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(model_, s_, c, s_.cr_kw[c], s_.cr_kf[c])};
   }
   s_.xp = model_.projectile_x0.cast<Real>();
   s_.vp = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
-  set_threads(threads);
   // Initial ledger: all energy is the projectile's.
   s_.book.ke_half = 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
   run_.ledger.projectile_ke_J = s_.book.ke_half;
-  escape_radius2_ = std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2);
+  return s_;
+}
+
+template <class Real>
+SolverT<Real>::SolverT(const Model& m, int threads) : Solver(m), s_(initial_state<Real>(model_, run_)), ctx_(model_) {
+  set_threads(threads);
 }
 
 // ---------------------------------------------------------------- set-up
-// Node -> (element, sign) and node -> (bending spring, weight) lists, so forces are
-// gathered per node: race-free in parallel and independent of the thread count.
+// What the model determines: the material constants, and the node -> (element, sign) and
+// node -> (bending spring, weight) lists, so forces are gathered per node: race-free in
+// parallel and independent of the thread count.
 template <class Real>
-inline void SolverT<Real>::build_incidence() {
+Context<Real>::Context(const Model& model_)
+    : simd(lanes_possible<Real>()),
+      zener(ZenerConstants{model_.k1 > 0 ? model_.k1 : 1, model_.k2 > 0 ? model_.k2 : 1,
+                           model_.damping > 0 ? model_.damping : 1},
+            model_.dt),
+      compressible(model_.compression != CrossingCompression::rigid),
+      escape_radius2(std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2)),
+      damping_k(model_.element_damping_beta * model_.modulus_inst),
+      crimp_damping_k(model_.crimp_damping_beta * model_.modulus_inst) {
   const int n = model_.node_count;
   std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
   for (int e = 0; e < model_.element_count; ++e) {
@@ -98,7 +111,7 @@ inline void SolverT<Real>::build_incidence() {
     // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
     if (model_.bend_mirror[s] >= 0) {
-      // Mirror spring: s_.bend_force is the force on this element's midpoint.
+      // Mirror spring: State::bend_force is the force on this element's midpoint.
       nb[model_.elem_a[e1]].push_back({int(s), Real(0.5)});
       nb[model_.elem_b[e1]].push_back({int(s), Real(0.5)});
       continue;
@@ -112,17 +125,19 @@ inline void SolverT<Real>::build_incidence() {
       if (!shared) nb[ends[k]].push_back({int(s), Real(k < 2 ? -0.5 : 0.5)});
     }
   }
-  inc_e_off_.assign(n + 1, 0);
-  inc_b_off_.assign(n + 1, 0);
+  inc_e_off.assign(n + 1, 0);
+  inc_b_off.assign(n + 1, 0);
   for (int i = 0; i < n; ++i) {
-    inc_e_off_[i + 1] = inc_e_off_[i] + int(ne[i].size());
-    inc_b_off_[i + 1] = inc_b_off_[i] + int(nb[i].size());
-    for (auto& p : ne[i]) inc_e_.push_back(p);
-    for (auto& p : nb[i]) inc_b_.push_back(p);
+    inc_e_off[i + 1] = inc_e_off[i] + int(ne[i].size());
+    inc_b_off[i + 1] = inc_b_off[i] + int(nb[i].size());
+    for (auto& p : ne[i]) inc_e.push_back(p);
+    for (auto& p : nb[i]) inc_b.push_back(p);
   }
 }
 
 // The two precisions (solver.h: Precision).
+template struct Context<float>;
+template struct Context<double>;
 template SolverT<float>::SolverT(const Model& m, int threads);
 template SolverT<double>::SolverT(const Model& m, int threads);
 

@@ -1,12 +1,176 @@
 // Stage yarn_contact (Eq 5-17): crossing tracking, closest points, the normal correction with
 // the compression law, stick/slip friction.
-#include "solver/solver_t.h"
+#include "solver/hold.h"
+#include "solver/stage.h"
 
 namespace ravel::detail {
+namespace {
+
+// The stage's inputs, bound for its helpers.
+template <class Real>
+struct YarnContact {
+  using V3 = Eigen::Matrix<Real, 3, 1>;
+  using LastPair = detail::LastPair<Real>;
+  const Model& model_;
+  State<Real>& s_;
+  RunState& run_;
+  Context<Real>& ctx_;
+
+  int ynode(int yarn, int k) const { return model_.yarn_node(yarn, k); }
+  bool seg_ok(int yarn, int s) const {
+    return s >= 0 && s + 1 < model_.yarn_size(yarn) && !s_.broken_flag[model_.yarn_elem_offset[yarn] + s];
+  }
+  Real seg_len(int yarn, int s) const { return (s_.x[ynode(yarn, s + 1)] - s_.x[ynode(yarn, s)]).norm(); }
+
+  // int(std::floor(u)) for a material coordinate. Those are >= 0 but for rounding, and the
+  // truncating conversion is then the floor in one instruction (std::floor is a libm-like
+  // sequence on the baseline x86-64 without SSE4.1's roundsd).
+  static int floor_int(double u) { return u >= 0 ? int(u) : int(std::floor(u)); }
+  // Lengths of two consecutive segments of a yarn, first and first + 1, known already (the
+  // lanes measured them); other segments are measured when asked for.
+  struct KnownLengths {
+    int first = -(1 << 30);  // none
+    Real len[2];
+  };
+  Real seg_len(int yarn, int s, const KnownLengths& known) const {
+    const unsigned i = unsigned(s - known.first);
+    return i < 2 ? known.len[i] : seg_len(yarn, s);
+  }
+
+  Real arc_between(int yarn, double u0, double u1, const KnownLengths& known = {}) const;
+  double advance(int yarn, double u, double arc, const KnownLengths& known = {}) const;
+
+  // The nodes around a crossing's tracked pair, loaded once per pass: warp nodes kw-1..kw+1
+  // and weft nodes kf-1..kf+1 (id -1 past a yarn's end), their positions and whether the two
+  // segments of each yarn next to the tracked node are intact. Tracking, the closest points,
+  // the side test and the chord coordinates all work on this window.
+  struct Window {
+    int kw, kf;  // set by load_window
+    int wnode[3], fnode[3];
+    V3 xw[3], xf[3];
+    bool wseg[2], fseg[2];  // warp segments kw-1, kw; weft segments kf-1, kf intact
+  };
+  WindowIds window_ids(const Crossing& cr, int kw, int kf) const;
+  void load_window(const WindowIds& id, Window& w) const;
+  void load_window(int c, Window& w);
+  void load_window(const Crossing& cr, int kw, int kf, Window& w) const;
+
+  bool track(int c, Window& w, bool loaded = false);
+
+  void release(int c, std::uint8_t why);
+
+  // The contact between two crossing yarns: closest points of the 2 x 2 adjoining
+  // segment pairs (Eq 5-8). The zig-zag's kinks make pairs tie for the smallest |d| (at rest
+  // all four do); pairs within kTieBand * D of the closest share the contact, so the
+  // correction is continuous in the state and a mirror-symmetric state gets a
+  // mirror-symmetric correction (see docs/MODEL.md).
+  static constexpr double kTieBand = 0.02;
+  // The share of a compressible crossing's closure left from before the step (below its
+  // flattened distance, or beyond the law's) that one step's shift removes. A crossing
+  // alone would take all of it; under the Jacobi sweep the shifts of neighbouring crossings
+  // that share nodes add up, and a broken end sliding through compressed crossings then set
+  // off a cascade of ever larger shifts (a 70 m/s default-scene run: shifts of 20-90 um per
+  // step, elements stretched past failure in one step, and a diverged energy balance at
+  // 0.5 ms with the full shift; 0.1 % balance error with half). Rigid crossings keep the
+  // paper's full correction.
+  static constexpr double kCompressedShift = 0.5;
+  // ... and at most this share of D per step. A shift's work against the yarn forces is booked
+  // by the trapezoid rule, half with the force of the next step, after that step's motion too;
+  // the error grows with shift times motion, and shifts of 30-45 um per step at free edges
+  // where yarn ends whip at 200 m/s created 20 % of the impact energy over 1.4-3.6 ms of
+  // slowly caught low-friction runs near the ballistic limit. A closure left over is met
+  // again the next step.
+  static constexpr double kMaxCompressedShift = 0.02;
+  // The most closure below the flattened distance c_min the cap may leave, as a share of c_min.
+  static constexpr double kFloorLeft = 0.5;
+  static Real compressed_shift(Real closure, Real D) {
+    return std::min(Real(kCompressedShift) * closure, Real(kMaxCompressedShift) * D);
+  }
+  // No member initialisers: the batches' arrays of these are filled, not cleared first
+  // (closest starts from a zeroed one, the lanes set every field).
+  struct ContactGeom {
+    bool ok;
+    int sw, sf;  // the first closest pair (for the end-of-yarn tests)
+    Real a, b;
+    V3 d;        // contact vector warp -> weft (mean over tied pairs)
+    Real dist;   // smallest |d|
+    Real ww[3];  // weights on warp nodes kw-1, kw, kw+1
+    Real wf[3];  // weights on weft nodes kf-1, kf, kf+1
+    int lane;    // computed in this lane of the batch's lanes::ClosestBatch, which then has the
+                 // rest of the window's geometry too; -1: computed alone
+    bool moved;  // (lanes) another node pair of the window is nearer than the tracked one
+  };
+
+  ContactGeom closest(const Crossing& cr, const Window& w) const;
+
+  // Cross product of the first closest pair's warp and weft segments; times the crossing's
+  // fixed sign it is the side test's normal n (SPEC §4), unnormalised.
+  static V3 pair_cross(const Window& w, const ContactGeom& g) {
+    const V3 tw = w.xw[g.sw - w.kw + 2] - w.xw[g.sw - w.kw + 1];
+    const V3 tf = w.xf[g.sf - w.kf + 2] - w.xf[g.sf - w.kf + 1];
+    return tw.cross(tf);
+  }
+
+  bool slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const;
+
+  double chord_coord(int yarn, int k, const V3* xs, const bool* seg, const V3& p, V3& tangent) const;
+  void coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const;
+
+  using CrossingImpulse = detail::CrossingImpulse<Real>;
+
+  void run();
+  void residual_penetration();
+
+  // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums,
+  // applied once per node by finish_pass; nodes the projectile holds take each correction
+  // separately, as the hold projects out the part pushing into the projectile.
+  void gather(const CrossingImpulse& r, int lo, int hi);
+
+  void finish_pass(int lo, int hi);
+
+  void apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part);
+
+  void shift_node(int i, const V3& S, bool hold);
+
+  // Crossings [c0, c1) (at most kBatch) in one pass: tracking of each, then the closest
+  // points of those whose four segments are intact together in lanes (when on and the
+  // processor has them; the same numbers bit for bit), then the rest of each.
+  static constexpr int kBatch = lanes::kWidth;
+  void crossing_batch(int c0, int c1, Real alpha, bool first, bool last, CrossingImpulse* out);
+
+  // Whether the lanes take a window: all four segments next to the tracked pair intact.
+  bool lane_window(const Window& w) const { return ctx_.simd && w.wseg[0] && w.wseg[1] && w.fseg[0] && w.fseg[1]; }
+  void closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g, lanes::ClosestBatch& lb) const;
+
+  bool pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g, const lanes::ClosestBatch& lb,
+                   CrossingImpulse& r);
+
+  void compress(int c, Real alpha, bool last, Real s_p, Real span, Real winv, Real P, Real approach, const V3& u,
+                CrossingImpulse& r);
+
+  // Friction (Eq 12-15), per yarn, against the stuck material points. The contact's
+  // material coordinate on each yarn is the partner's contact point projected on this
+  // yarn's chord through its tracked node: continuous in time, unlike the raw closest
+  // point, which jumps between the equivalent segment pairs of the zig-zag.
+  struct FrictionSetup {
+    double cw, cf;        // material coordinates of the contact on the warp and the weft
+    V3 Tw, Tf;            // unit chord tangents
+    double fwinv;         // inverse effective mass of the contact points' relative motion
+    KnownLengths lw, lf;  // the window's segment lengths, when the lanes measured them
+  };
+  void friction_setup(int c, const Window& w, const ContactGeom& g, const lanes::ClosestBatch& lb, CrossingImpulse& r,
+                      FrictionSetup& s);
+
+  void pass_friction(int c, Real alpha, bool last, const FrictionSetup& s, CrossingImpulse& r);
+
+  enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8, ev_separated = 16 };
+};
+
+}  // namespace
 
 // Arc length along a yarn from material coordinate u0 to u1 (coordinate = segment + fraction).
 template <class Real>
-inline auto SolverT<Real>::arc_between(int yarn, double u0, double u1, const KnownLengths& known) const -> Real {
+inline auto YarnContact<Real>::arc_between(int yarn, double u0, double u1, const KnownLengths& known) const -> Real {
   // Both ends on one segment of known length (the usual stuck contact): (u1 - u0) times
   // that length, which is what the general walk below gives then too.
   if (const int a = floor_int(u0); unsigned(a - known.first) < 2u && a == floor_int(u1))
@@ -25,7 +189,7 @@ inline auto SolverT<Real>::arc_between(int yarn, double u0, double u1, const Kno
 
 // Material coordinate reached by moving an arc length `arc` (signed) from u.
 template <class Real>
-inline double SolverT<Real>::advance(int yarn, double u, double arc, const KnownLengths& known) const {
+inline double YarnContact<Real>::advance(int yarn, double u, double arc, const KnownLengths& known) const {
   auto seg_len = [&](int, int s) { return this->seg_len(yarn, s, known); };
   const int n = model_.yarn_size(yarn);
   int s = std::min(floor_int(u), n - 2);
@@ -47,7 +211,7 @@ inline double SolverT<Real>::advance(int yarn, double u, double arc, const Known
 }
 
 template <class Real>
-RAVEL_INLINE auto SolverT<Real>::window_ids(const Crossing& cr, int kw, int kf) const -> WindowIds {
+RAVEL_INLINE auto YarnContact<Real>::window_ids(const Crossing& cr, int kw, int kf) const -> WindowIds {
   WindowIds id;
   id.kw = kw;
   id.kf = kf;
@@ -72,7 +236,7 @@ RAVEL_INLINE auto SolverT<Real>::window_ids(const Crossing& cr, int kw, int kf) 
 
 // The nodes' positions and whether the four segments next to the pair are intact.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::load_window(const WindowIds& id, Window& w) const {
+RAVEL_INLINE void YarnContact<Real>::load_window(const WindowIds& id, Window& w) const {
   w.kw = id.kw;
   w.kf = id.kf;
   for (int k = 0; k < 3; ++k) {
@@ -89,14 +253,14 @@ RAVEL_INLINE void SolverT<Real>::load_window(const WindowIds& id, Window& w) con
 
 // The window of crossing c around its tracked pair.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::load_window(int c, Window& w) {
+RAVEL_INLINE void YarnContact<Real>::load_window(int c, Window& w) {
   WindowIds& id = s_.cr_win[c];
   if (id.kw != s_.cr_kw[c] || id.kf != s_.cr_kf[c]) id = window_ids(model_.crossings[c], s_.cr_kw[c], s_.cr_kf[c]);
   load_window(id, w);
 }
 
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::load_window(const Crossing& cr, int kw, int kf, Window& w) const {
+RAVEL_INLINE void YarnContact<Real>::load_window(const Crossing& cr, int kw, int kf, Window& w) const {
   load_window(window_ids(cr, kw, kf), w);
 }
 
@@ -105,7 +269,7 @@ RAVEL_INLINE void SolverT<Real>::load_window(const Crossing& cr, int kw, int kf,
 // one node in one step, which the method assumes never happens: reported, not hidden.
 // Returns true in that case; `w` is left loaded around the tracked pair.
 template <class Real>
-inline bool SolverT<Real>::track(int c, Window& w, bool loaded) {
+inline bool YarnContact<Real>::track(int c, Window& w, bool loaded) {
   const Crossing& cr = model_.crossings[c];
   bool skipped = false;
   if (!loaded) load_window(c, w);
@@ -130,7 +294,7 @@ inline bool SolverT<Real>::track(int c, Window& w, bool loaded) {
 }
 
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::release(int c, std::uint8_t why) {
+RAVEL_INLINE void YarnContact<Real>::release(int c, std::uint8_t why) {
   s_.cr_active[c] = 0;
   s_.cr_stick_e[c] = 0;  // the penalty spring lets go (its energy then shows as friction work)
   s_.cr_fn[c] = s_.cr_ft[c] = s_.cr_slip[c] = 0;
@@ -139,7 +303,7 @@ RAVEL_INLINE void SolverT<Real>::release(int c, std::uint8_t why) {
 }
 
 template <class Real>
-inline auto SolverT<Real>::closest(const Crossing& cr, const Window& w) const -> ContactGeom {
+inline auto YarnContact<Real>::closest(const Crossing& cr, const Window& w) const -> ContactGeom {
   ContactGeom g{};
   g.d.setZero();
   g.lane = -1;
@@ -239,7 +403,7 @@ inline auto SolverT<Real>::closest(const Crossing& cr, const Window& w) const ->
 // Is the contact point at an end of the yarn beyond which it has no segment, with the
 // partner lying beyond that end? Then the partner has slipped off (ravelled out).
 template <class Real>
-RAVEL_INLINE bool SolverT<Real>::slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
+RAVEL_INLINE bool YarnContact<Real>::slipped_off(int yarn, int seg, Real frac, const V3& toward_partner) const {
   const bool at_end = frac >= Real(1) - Real(1e-6) && !seg_ok(yarn, seg + 1) &&
                       !(seg + 2 == model_.yarn_size(yarn) && !(model_.yarn_end_free[yarn] & 2));
   const bool at_start =
@@ -256,8 +420,8 @@ RAVEL_INLINE bool SolverT<Real>::slipped_off(int yarn, int seg, Real frac, const
 // Material coordinate (node index + fraction) of point p along a yarn near node k:
 // projection on the chord joining k's neighbours (unit direction returned in `tangent`).
 template <class Real>
-inline double SolverT<Real>::chord_coord(int yarn, int k, const V3* xs, const bool* seg, const V3& p,
-                                         V3& tangent) const {
+inline double YarnContact<Real>::chord_coord(int yarn, int k, const V3* xs, const bool* seg, const V3& p,
+                                             V3& tangent) const {
   // xs: positions of nodes k-1, k, k+1; seg: segments k-1 and k intact (a Window's).
   const int km = seg[0] ? k - 1 : k;
   const int kp = seg[1] ? k + 1 : k;
@@ -296,7 +460,7 @@ inline double SolverT<Real>::chord_coord(int yarn, int k, const V3* xs, const bo
 
 // The two nodes and fraction of a material coordinate.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
+RAVEL_INLINE void YarnContact<Real>::coord_nodes(int yarn, double u, int& n0, int& n1, Real& frac) const {
   const int s = std::clamp(floor_int(u), 0, model_.yarn_size(yarn) - 2);
   frac = Real(std::clamp(u - s, 0.0, 1.0));
   n0 = ynode(yarn, s);
@@ -307,8 +471,8 @@ RAVEL_INLINE void SolverT<Real>::coord_nodes(int yarn, double u, int& n0, int& n
 // windows: the lane windows together in lanes (when on and the processor has them; the
 // same numbers bit for bit), the others one at a time.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g,
-                                               lanes::ClosestBatch& lb) const {
+RAVEL_INLINE void YarnContact<Real>::closest_batch(int c0, int c1, const bool* on, const Window* w, ContactGeom* g,
+                                                   lanes::ClosestBatch& lb) const {
   int lane[kBatch];
   int nl = 0;
   for (int c = c0; c < c1; ++c) {
@@ -352,10 +516,10 @@ RAVEL_INLINE void SolverT<Real>::closest_batch(int c0, int c1, const bool* on, c
 }
 
 template <class Real>
-void SolverT<Real>::yarn_contact() {
+void YarnContact<Real>::run() {
   const int nc = int(model_.crossings.size());
   const int N = model_.contact_iterations;
-  impulses_.resize(nc);  // (s_.cr_fn_step, s_.cr_ft and s_.cr_event are cleared by each crossing's first pass)
+  ctx_.impulses.resize(nc);  // (s_.cr_fn_step, s_.cr_ft and s_.cr_event are cleared by each crossing's first pass)
   for (int pass = 1; pass <= N; ++pass) {
     // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
     const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
@@ -366,15 +530,15 @@ void SolverT<Real>::yarn_contact() {
     // One thread runs the same code (gathering each batch as it was done instead saved 2 %
     // of a one-thread step, not worth a second path).
     const int nb = (nc + kBatch - 1) / kBatch;
-    rec_first_.resize(nc);
-    rec_last_.resize(nc);
-#pragma omp parallel for num_threads(threads_) schedule(static)
+    ctx_.rec_first.resize(nc);
+    ctx_.rec_last.resize(nc);
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static)
     for (int b = 0; b < nb; ++b) {
       const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
-      crossing_batch(c0, c1, alpha, first, last, &impulses_[c0]);
+      crossing_batch(c0, c1, alpha, first, last, &ctx_.impulses[c0]);
       for (int c = c0; c < c1; ++c) {
         // The lowest and highest node the record can touch.
-        const CrossingImpulse& r = impulses_[c];
+        const CrossingImpulse& r = ctx_.impulses[c];
         int a = std::numeric_limits<int>::max(), z = -1;
         auto take = [&](const int* nodes, int count) {
           for (int k = 0; k < count; ++k)
@@ -382,23 +546,24 @@ void SolverT<Real>::yarn_contact() {
         };
         if (r.has_n || r.has_s || r.has_c) take(r.node, 6);
         if (r.has_f) take(r.fnode, 4);
-        rec_first_[c] = a;
-        rec_last_[c] = z;
+        ctx_.rec_first[c] = a;
+        ctx_.rec_last[c] = z;
       }
     }
     // Running maximum of the highest node and running minimum (from the end) of the
     // lowest: a node range [lo, hi) is touched only by records between the first
     // crossing whose running maximum reaches lo and the last whose running minimum is
     // below hi. With the node numbering of model.cpp that is about 1/T of them each.
-    for (int c = 1; c < nc; ++c) rec_last_[c] = std::max(rec_last_[c], rec_last_[c - 1]);
-    for (int c = nc - 2; c >= 0; --c) rec_first_[c] = std::min(rec_first_[c], rec_first_[c + 1]);
-#pragma omp parallel num_threads(threads_)
+    for (int c = 1; c < nc; ++c) ctx_.rec_last[c] = std::max(ctx_.rec_last[c], ctx_.rec_last[c - 1]);
+    for (int c = nc - 2; c >= 0; --c) ctx_.rec_first[c] = std::min(ctx_.rec_first[c], ctx_.rec_first[c + 1]);
+#pragma omp parallel num_threads(ctx_.threads)
     {
       int lo, hi, t;
       my_share(model_.node_count, lo, hi, t);
-      const int c_first = int(std::lower_bound(rec_last_.begin(), rec_last_.end(), lo) - rec_last_.begin());
-      const int c_end = int(std::lower_bound(rec_first_.begin(), rec_first_.end(), hi) - rec_first_.begin());
-      for (int c = c_first; c < c_end; ++c) gather(impulses_[c], lo, hi);
+      const int c_first = int(std::lower_bound(ctx_.rec_last.begin(), ctx_.rec_last.end(), lo) - ctx_.rec_last.begin());
+      const int c_end =
+          int(std::lower_bound(ctx_.rec_first.begin(), ctx_.rec_first.end(), hi) - ctx_.rec_first.begin());
+      for (int c = c_first; c < c_end; ++c) gather(ctx_.impulses[c], lo, hi);
       finish_pass(lo, hi);
     }
   }
@@ -410,8 +575,8 @@ void SolverT<Real>::yarn_contact() {
     // How far the two yarns' material moved against each other this step: the offset of
     // last step's tracked node pair, then and now (the pair may have been re-chosen since).
     const LastPair was = s_.cr_last[c];
-    const Real moved = (pair_offset(c, was.kw, was.kf) - was.offset).norm();
-    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(c, s_.cr_kw[c], s_.cr_kf[c])};
+    const Real moved = (pair_offset(model_, s_, c, was.kw, was.kf) - was.offset).norm();
+    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(model_, s_, c, s_.cr_kw[c], s_.cr_kf[c])};
     if (s_.cr_active[c]) {
       fsum += s_.cr_fn[c];
       usum += s_.cr_u[c];
@@ -453,7 +618,7 @@ void SolverT<Real>::yarn_contact() {
 }
 
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi) {
+RAVEL_INLINE void YarnContact<Real>::gather(const CrossingImpulse& r, int lo, int hi) {
   if (!r.any_held) {
     // The common case, no held node: every weight on a node in [lo, hi) goes to the sums.
     const unsigned span = unsigned(hi - lo);
@@ -492,7 +657,7 @@ RAVEL_INLINE void SolverT<Real>::gather(const CrossingImpulse& r, int lo, int hi
 
 // Apply the pass's gathered sums to the nodes in [lo, hi).
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
+RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
   const Real dt = Real(model_.dt);
   for (int i = lo; i < hi; ++i) {
     const Real im = Real(model_.inv_mass[i]);
@@ -507,7 +672,7 @@ RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
       zero_fixed(dx, fx);
     }
     V3 dv = dvn + dvf;
-    if (compressible_) {
+    if (ctx_.compressible) {
       V3 dvc = im * s_.sum_c[i];
       s_.sum_c[i].setZero();
       if (fx) zero_fixed(dvc, fx);
@@ -527,16 +692,10 @@ RAVEL_INLINE void SolverT<Real>::finish_pass(int lo, int hi) {
 // (friction and compression, whose work on the projectile is their own; null: the normal
 // correction's).
 template <class Real>
-inline void SolverT<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part) {
+inline void YarnContact<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part) {
   const Real im = Real(model_.inv_mass[i]);
   if (im == Real(0)) return;
-  const Real pn = P.dot(s_.held_n[i]);
-  if (hold && pn < Real(0)) {
-    // Held by the projectile: the part pushing into it passes to the projectile.
-    s_.held_imp[i] += pn * s_.held_n[i];
-    if (part) (*part)[i] += pn * s_.held_n[i];
-    P -= pn * s_.held_n[i];
-  }
+  if (hold) pass_to_projectile(s_, i, P, part);  // (hold.h)
   V3 dv = im * P;
   zero_fixed(dv, model_.fixed[i]);
   s_.v[i] += dv;
@@ -546,12 +705,11 @@ inline void SolverT<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool
 
 // Move a node by a mass-weighted shift (no velocity change); recorded for the ledger.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::shift_node(int i, const V3& S, bool hold) {
+RAVEL_INLINE void YarnContact<Real>::shift_node(int i, const V3& S, bool hold) {
   const Real im = Real(model_.inv_mass[i]);
   if (im == Real(0)) return;
   V3 dx = im * S;
-  const Real dn = dx.dot(s_.held_n[i]);
-  if (hold && dn < Real(0)) dx -= dn * s_.held_n[i];  // not into the projectile that holds it
+  if (hold) keep_out(s_, i, dx);  // not into the projectile that holds it (hold.h)
   zero_fixed(dx, model_.fixed[i]);
   s_.x[i] += dx;
   s_.dx_contact[i] += dx;
@@ -559,7 +717,7 @@ RAVEL_INLINE void SolverT<Real>::shift_node(int i, const V3& S, bool hold) {
 
 // `first`: the step's first pass, which clears the crossings' per-step state.
 template <class Real>
-inline void SolverT<Real>::crossing_batch(int c0, int c1, Real alpha, bool first, bool last, CrossingImpulse* out) {
+inline void YarnContact<Real>::crossing_batch(int c0, int c1, Real alpha, bool first, bool last, CrossingImpulse* out) {
   Window w[kBatch];
   ContactGeom g[kBatch];
   bool on[kBatch];
@@ -605,8 +763,8 @@ inline void SolverT<Real>::crossing_batch(int c0, int c1, Real alpha, bool first
 // Normal correction of one tracked crossing in one pass, given its window and closest
 // points. Returns whether the crossing goes on to friction (not released, not clamped).
 template <class Real>
-RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g,
-                                             const lanes::ClosestBatch& lb, CrossingImpulse& r) {
+RAVEL_INLINE bool YarnContact<Real>::pass_normal(int c, Real alpha, bool last, const Window& w, const ContactGeom& g,
+                                                 const lanes::ClosestBatch& lb, CrossingImpulse& r) {
   const Crossing& cr = model_.crossings[c];
   const Real dt = Real(model_.dt);
   if (!g.ok) {
@@ -693,9 +851,7 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
       continue;
     }
     r.any_held = true;
-    const Real un = u.dot(s_.held_n[i]);
-    const Real free = r.w[k] * un < Real(0) ? Real(1) - un * un : Real(1);
-    winv += wi * free;
+    winv += wi * held_mobility(s_, i, r.w[k], u);  // (hold.h)
   }
   r.hold = winv >= Real(kMinHeldMobility) * winv_free;
   if (!r.hold) winv = winv_free;
@@ -703,8 +859,8 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
   // Transverse compression (docs/MODEL.md §4): between the rest distance D and the
   // flattened distance c_min the crossing is a compliant contact; below c_min it is the
   // paper's rigid one. Rigid crossings have c_min = D, and everything below is as before.
-  const Real span = compressible_ ? D - Real(cr.flattened_distance) : Real(0);  // compressible distance D - c_min
-  const Real floor_pen = delta - span;                                          // penetration below c_min
+  const Real span = ctx_.compressible ? D - Real(cr.flattened_distance) : Real(0);  // compressible distance D - c_min
+  const Real floor_pen = delta - span;                                              // penetration below c_min
   const bool compliant = span > Real(0) && delta > Real(0);
   // With the split, the approach speed of the two contact points along u bounds the
   // velocity change a correction may make (see below).
@@ -758,8 +914,8 @@ RAVEL_INLINE bool SolverT<Real>::pass_normal(int c, Real alpha, bool last, const
 // the work the impulse takes beyond the law's stored energy is booked as compression_loss.
 // s_p: distance above c_min after the rigid part (>= 0); P: the rigid part's impulse.
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p, Real span, Real winv, Real P,
-                                          Real approach, const V3& u, CrossingImpulse& r) {
+RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real s_p, Real span, Real winv, Real P,
+                                              Real approach, const V3& u, CrossingImpulse& r) {
   const Crossing& cr = model_.crossings[c];
   const double dt = model_.dt;
   const double kap = dt * dt * double(winv), Fh = cr.compression_force;
@@ -800,8 +956,9 @@ RAVEL_INLINE void SolverT<Real>::compress(int c, Real alpha, bool last, Real s_p
 }
 
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::friction_setup(int c, const Window& w, const ContactGeom& g,
-                                                const lanes::ClosestBatch& lb, CrossingImpulse& r, FrictionSetup& s) {
+RAVEL_INLINE void YarnContact<Real>::friction_setup(int c, const Window& w, const ContactGeom& g,
+                                                    const lanes::ClosestBatch& lb, CrossingImpulse& r,
+                                                    FrictionSetup& s) {
   const Crossing& cr = model_.crossings[c];
   const int kw = w.kw, kf = w.kf;
   if (const int l = g.lane; l >= 0) {
@@ -837,8 +994,8 @@ RAVEL_INLINE void SolverT<Real>::friction_setup(int c, const Window& w, const Co
 
 // Stick or slip on each yarn, and the friction impulse of one pass (Eq 12-15).
 template <class Real>
-RAVEL_INLINE void SolverT<Real>::pass_friction(int c, Real alpha, bool last, const FrictionSetup& s,
-                                               CrossingImpulse& r) {
+RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last, const FrictionSetup& s,
+                                                   CrossingImpulse& r) {
   const Crossing& cr = model_.crossings[c];
   const Real dt = Real(model_.dt);
   const double fwinv = s.fwinv;
@@ -885,11 +1042,11 @@ RAVEL_INLINE void SolverT<Real>::pass_friction(int c, Real alpha, bool last, con
 // The interpenetration left at the end of a step (after every correction), sampled every
 // kPenetrationCheckEvery steps: what the contact algorithm failed to resolve.
 template <class Real>
-void SolverT<Real>::residual_penetration() {
+void YarnContact<Real>::residual_penetration() {
   const int nc = int(model_.crossings.size());
   const int nb = (nc + kBatch - 1) / kBatch;
   double worst = 0;
-#pragma omp parallel for num_threads(threads_) schedule(static) reduction(max : worst) if (threads_ > 1)
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(max : worst) if (ctx_.threads > 1)
   for (int b = 0; b < nb; ++b) {
     const int c0 = b * kBatch, c1 = std::min(nc, c0 + kBatch);
     Window w[kBatch];
@@ -907,7 +1064,7 @@ void SolverT<Real>::residual_penetration() {
       const Crossing& cr = model_.crossings[c];
       const V3 n = Real(cr.side) * pair_cross(w[k], g[k]);
       // Below the flattened distance (D itself for rigid crossings): what the law forbids.
-      const double D = cr.contact_distance, cmin = compressible_ ? cr.flattened_distance : D;
+      const double D = cr.contact_distance, cmin = ctx_.compressible ? cr.flattened_distance : D;
       const double dist = double(g[k].dist);
       const double pen = g[k].d.dot(n) >= Real(0) ? cmin - dist : (dist > D ? 0.0 : cmin + dist);
       worst = std::max(worst, pen);
@@ -917,9 +1074,19 @@ void SolverT<Real>::residual_penetration() {
 }
 
 // The two precisions (solver.h: Precision).
-template void SolverT<float>::yarn_contact();
-template void SolverT<double>::yarn_contact();
-template void SolverT<float>::residual_penetration();
-template void SolverT<double>::residual_penetration();
+template <class Real>
+void yarn_contact(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx) {
+  YarnContact<Real>{model, s, run, ctx}.run();
+}
+
+template <class Real>
+void residual_penetration(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx) {
+  YarnContact<Real>{model, s, run, ctx}.residual_penetration();
+}
+
+template void yarn_contact(const Model&, State<float>&, RunState&, Context<float>&);
+template void yarn_contact(const Model&, State<double>&, RunState&, Context<double>&);
+template void residual_penetration(const Model&, State<float>&, RunState&, Context<float>&);
+template void residual_penetration(const Model&, State<double>&, RunState&, Context<double>&);
 
 }  // namespace ravel::detail

@@ -3,7 +3,7 @@
 // the geometry that depends on the crossing windows' positions alone.
 //
 // The lane code performs, lane by lane, exactly the IEEE operations of the one-crossing code
-// in solver.cpp (SolverT::closest, the side test of pass_normal, chord_coord, seg_len), in
+// in solver/yarn_contact.cpp (YarnContact::closest, the side test of pass_normal, chord_coord, seg_len), in
 // the same order, and this file is compiled without
 // floating-point contraction: the results are the same bit for bit (tested), only computed
 // four at a time. It covers the regular case, all four segments next to the tracked pair
@@ -14,7 +14,7 @@ namespace ravel::lanes {
 
 constexpr int kWidth = 4;
 // A node that projects this close to an end of the chord through its neighbours (a yarn
-// folded back at it) keeps the chord's linear material coordinate (SolverT::chord_coord).
+// folded back at it) keeps the chord's linear material coordinate (YarnContact::chord_coord).
 constexpr double kChordNodeMin = 0.01;
 
 // Four crossing windows. The inputs point into each crossing's own window (read in place:
@@ -26,22 +26,22 @@ struct ClosestBatch {
   const double* xw[kWidth];
   const double* xf[kWidth];
   double band[kWidth];
-  double side[kWidth];  // the crossing's side sign (SolverT::pass_normal)
-  // Out, as SolverT::ContactGeom: mean contact vector warp -> weft, smallest |d|, weights
+  double side[kWidth];  // the crossing's side sign (YarnContact::pass_normal)
+  // Out, as YarnContact::ContactGeom: mean contact vector warp -> weft, smallest |d|, weights
   // on the three warp / weft nodes, and the first closest pair's segments (0: kw-1 / kf-1,
   // 1: kw / kf) and fractions.
   double d[3][kWidth], dist[kWidth], ww[3][kWidth], wf[3][kWidth], a[kWidth], b[kWidth];
   long long iw[kWidth], jf[kWidth];
   // Out, the rest of the geometry the correction uses, as the one-crossing code computes it
-  // from the window: the side-test normal n (SolverT::pass_normal), |d| and d / |d|; the
+  // from the window: the side-test normal n (YarnContact::pass_normal), |d| and d / |d|; the
   // chord offsets of the contact along the warp and the weft (clamped to [-1, 1]: the
   // material coordinate is the tracked node + offset) and the chords' unit tangents
-  // (SolverT::chord_coord); the lengths of warp segments kw-1, kw and weft segments kf-1, kf.
+  // (YarnContact::chord_coord); the lengths of warp segments kw-1, kw and weft segments kf-1, kf.
   double n[3][kWidth], dlen[kWidth], ud[3][kWidth];
   double offw[kWidth], offf[kWidth], tw[3][kWidth], tf[3][kWidth];
   double lw[2][kWidth], lf[2][kWidth];
   // Out: whether a pair of the window's nodes other than the middle one is strictly closer
-  // than the middle pair (SolverT::track would move the tracked pair; all else above then
+  // than the middle pair (YarnContact::track would move the tracked pair; all else above then
   // belongs to a pair that is not the nearest and is recomputed by the solver).
   long long moved[kWidth];
 };

@@ -2,7 +2,7 @@
 // four elements at once, in the AVX2 lanes of processors that have them.
 //
 // As in contact_lanes.h, the lane code performs lane by lane exactly the IEEE operations of
-// the one-element code in solver.cpp (SolverT::internal_forces with ZenerStepper::step), in
+// the one-element code in solver/internal_forces.cpp (InternalForces::element_one with ZenerStepper::step), in
 // the same order, without floating-point contraction: the results are the same bit for bit
 // (tested). It covers the regular case, four intact elements of which none fails in this
 // step; the solver does the others one at a time.
@@ -21,7 +21,7 @@ struct ElementBatch {
   double k1, k2, mu, dt, inv_dt, lam, g, decay, slack_decay;
   double fail;
   bool breakable;
-  double damping_k = 0;  // beta E_inst of the element damping (SolverT::element_one)
+  double damping_k = 0;  // beta E_inst of the element damping (internal_forces.cpp: element_one)
   // In/out, per element (pointers to element e0 of the solver's arrays): last step's strain
   // (becomes this step's), the viscous strain; out: strain, stress, stored energy and the
   // force on node b (x y z per element).
