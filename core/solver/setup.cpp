@@ -17,15 +17,12 @@ State<Real> initial_state(const Model& model_, RunState& run_) {
   s_.dv_friction.assign(n, V3::Zero());
   if (model_.compression != CrossingCompression::rigid) {
     s_.dv_compress.assign(n, V3::Zero());
-    s_.sum_c.assign(n, V3::Zero());
   }
   s_.dv_pfriction.assign(n, V3::Zero());
   s_.dx_contact.assign(n, V3::Zero());
   s_.held_n.assign(n, V3::Zero());
   s_.held_flag.assign(n, 0);
-  s_.sum_n.assign(n, V3::Zero());
-  s_.sum_f.assign(n, V3::Zero());
-  s_.sum_s.assign(n, V3::Zero());
+  s_.pass_sum.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
   s_.held_imp.assign(n, V3::Zero());
   s_.held_fric.assign(n, V3::Zero());
   s_.held_comp.assign(n, V3::Zero());

@@ -48,7 +48,7 @@ struct State {
   // This step's corrections, per mechanism (yarn contact normal and friction, projectile
   // friction, position shifts, compression law): zeroed by finish_step once booked.
   std::vector<V3> dv_contact, dv_friction, dv_pfriction, dx_contact;
-  std::vector<V3> dv_compress, sum_c;  // (only when crossings are compressible)
+  std::vector<V3> dv_compress;  // (only when crossings are compressible)
   // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
   EnergyBook book;
   std::vector<double> cr_u;        // per crossing: the compression law's stored energy, end of the step
@@ -60,8 +60,14 @@ struct State {
   std::vector<V3> held_n, held_imp, held_fric, held_comp;
   std::vector<int> held_list, ptouch_list;
   std::vector<std::uint8_t> held_flag;
-  std::vector<V3> sum_n, sum_f, sum_s;  // a pass's corrections summed per node (gather, finish_pass)
-  V3 proj_impulse = V3::Zero();         // the projectile contact's impulse on the projectile this step
+  // A pass's corrections summed per node (gather, finish_pass): normal impulse, friction
+  // impulse, position shift and compression impulse side by side, so that a crossing's record
+  // touches one place per node and the finish pass reads one stream.
+  struct PassSum {
+    V3 n, f, s, c;
+  };
+  std::vector<PassSum> pass_sum;
+  V3 proj_impulse = V3::Zero();  // the projectile contact's impulse on the projectile this step
   // --- Elements (SPEC §1-2): apparent strain, the yarn law's strain of the last step, the
   // Zener internal strain e_v, stress, broken flags (1: this step, 2: counted), force on
   // node b, stored energy.
@@ -96,7 +102,7 @@ struct State {
   // Every field, in one list for writing and reading (StateWriter / StateReader).
   template <class Ar>
   void io(Ar& ar) {
-    ar.mark(0x52565331);  // "RVS1"
+    ar.mark(0x52565332);  // "RVS2"
     ar.vec(x);
     ar.vec(v);
     ar.vec(f);
@@ -106,7 +112,6 @@ struct State {
     ar.vec(dv_pfriction);
     ar.vec(dx_contact);
     ar.vec(dv_compress);
-    ar.vec(sum_c);
     ar.pod(book);
     ar.vec(cr_u);
     ar.vec(cr_stick_e);
@@ -117,9 +122,7 @@ struct State {
     ar.vec(held_list);
     ar.vec(ptouch_list);
     ar.vec(held_flag);
-    ar.vec(sum_n);
-    ar.vec(sum_f);
-    ar.vec(sum_s);
+    ar.vec(pass_sum);
     ar.pod(proj_impulse);
     ar.vec(strain);
     ar.vec(prev_strain);

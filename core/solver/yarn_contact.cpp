@@ -11,6 +11,7 @@ template <class Real>
 struct YarnContact {
   using V3 = Eigen::Matrix<Real, 3, 1>;
   using LastPair = detail::LastPair<Real>;
+  using PassSum = typename State<Real>::PassSum;
   const Model& model_;
   State<Real>& s_;
   RunState& run_;
@@ -622,36 +623,38 @@ RAVEL_INLINE void YarnContact<Real>::gather(const CrossingImpulse& r, int lo, in
   if (!r.any_held) {
     // The common case, no held node: every weight on a node in [lo, hi) goes to the sums.
     const unsigned span = unsigned(hi - lo);
-    auto each = [lo, span](int count, const int* nodes, const Real* w, const V3 q, V3* __restrict sum) {
+    auto each = [lo, span](int count, const int* nodes, const Real* w, const V3 q, PassSum* __restrict sum,
+                           V3 PassSum::*part) {
       for (int k = 0; k < count; ++k)
-        if (unsigned(nodes[k] - lo) < span && w[k] != Real(0)) sum[nodes[k]] += w[k] * q;
+        if (unsigned(nodes[k] - lo) < span && w[k] != Real(0)) sum[nodes[k]].*part += w[k] * q;
     };
-    if (r.has_n) each(6, r.node, r.w, r.P, s_.sum_n.data());
-    if (r.has_f) each(4, r.fnode, r.fw, r.F, s_.sum_f.data());
-    if (r.has_s) each(6, r.node, r.w, r.S, s_.sum_s.data());
-    if (r.has_c) each(6, r.node, r.w, r.C, s_.sum_c.data());
+    PassSum* sum = s_.pass_sum.data();
+    if (r.has_n) each(6, r.node, r.w, r.P, sum, &PassSum::n);
+    if (r.has_f) each(4, r.fnode, r.fw, r.F, sum, &PassSum::f);
+    if (r.has_s) each(6, r.node, r.w, r.S, sum, &PassSum::s);
+    if (r.has_c) each(6, r.node, r.w, r.C, sum, &PassSum::c);
     return;
   }
   // One kind of correction: weights w on nodes, times the vector q.
-  auto each = [&](int count, const int* nodes, const Real* w, const V3& q, std::vector<V3>& sum, auto&& take_held) {
+  auto each = [&](int count, const int* nodes, const Real* w, const V3& q, V3 PassSum::*sum, auto&& take_held) {
     for (int k = 0; k < count; ++k) {
       const int i = nodes[k];
       if (unsigned(i - lo) >= unsigned(hi - lo) || w[k] == Real(0)) continue;  // i in [lo, hi), -1 not
       if (s_.held_flag[i])
         take_held(i, w[k] * q);
       else
-        sum[i] += w[k] * q;
+        s_.pass_sum[i].*sum += w[k] * q;
     }
   };
   if (r.has_n)
-    each(6, r.node, r.w, r.P, s_.sum_n,
+    each(6, r.node, r.w, r.P, &PassSum::n,
          [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_contact, r.hold, nullptr); });
   if (r.has_f)
-    each(4, r.fnode, r.fw, r.F, s_.sum_f,
+    each(4, r.fnode, r.fw, r.F, &PassSum::f,
          [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_friction, r.hold, &s_.held_fric); });
-  if (r.has_s) each(6, r.node, r.w, r.S, s_.sum_s, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
+  if (r.has_s) each(6, r.node, r.w, r.S, &PassSum::s, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
   if (r.has_c)
-    each(6, r.node, r.w, r.C, s_.sum_c,
+    each(6, r.node, r.w, r.C, &PassSum::c,
          [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_compress, r.hold, &s_.held_comp); });
 }
 
@@ -662,10 +665,11 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
   for (int i = lo; i < hi; ++i) {
     const Real im = Real(model_.inv_mass[i]);
     const std::uint8_t fx = model_.fixed[i];
-    V3 dvn = im * s_.sum_n[i], dvf = im * s_.sum_f[i], dx = im * s_.sum_s[i];
-    s_.sum_n[i].setZero();
-    s_.sum_f[i].setZero();
-    s_.sum_s[i].setZero();
+    PassSum& sum = s_.pass_sum[i];
+    V3 dvn = im * sum.n, dvf = im * sum.f, dx = im * sum.s;
+    sum.n.setZero();
+    sum.f.setZero();
+    sum.s.setZero();
     if (fx) {
       zero_fixed(dvn, fx);
       zero_fixed(dvf, fx);
@@ -673,8 +677,8 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
     }
     V3 dv = dvn + dvf;
     if (ctx_.compressible) {
-      V3 dvc = im * s_.sum_c[i];
-      s_.sum_c[i].setZero();
+      V3 dvc = im * sum.c;
+      sum.c.setZero();
       if (fx) zero_fixed(dvc, fx);
       dv += dvc;
       s_.dv_compress[i] += dvc;
