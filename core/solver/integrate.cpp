@@ -15,7 +15,7 @@ void integrate(const Model& model, State<Real>& s, RunState& run, const Context<
 #pragma omp parallel for num_threads(ctx.threads) schedule(static) reduction(max : maxr2) if (ctx.threads > 1)
   for (int i = 0; i < n; ++i) {
     s.v_prev[i] = s.v[i];
-    s.dx_contact[i].setZero();
+    s.corr[i].dx_contact.setZero();
     const std::uint8_t fx = model.fixed[i];
     if (fx == fix_all) continue;
     V3 v = s.v[i] + (dt * Real(model.inv_mass[i])) * s.f[i];

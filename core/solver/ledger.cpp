@@ -68,7 +68,7 @@ template <class Real>
 RAVEL_INLINE double Book<Real>::shift_energy() {
   s_.shifted.clear();
   for (int i = 0; i < model_.node_count; ++i)
-    if (s_.dx_contact[i].x() != Real(0) || s_.dx_contact[i].y() != Real(0) || s_.dx_contact[i].z() != Real(0))
+    if (const V3& dx = s_.corr[i].dx_contact; dx.x() != Real(0) || dx.y() != Real(0) || dx.z() != Real(0))
       s_.shifted.push_back(i);
   if (s_.shifted.empty()) return 0;
   if (s_.elem_mark.empty()) s_.elem_mark.assign(model_.element_count, 0), s_.bend_mark.assign(model_.bend_k.size(), 0);
@@ -77,7 +77,7 @@ RAVEL_INLINE double Book<Real>::shift_energy() {
     std::fill(s_.bend_mark.begin(), s_.bend_mark.end(), 0u);
     s_.mark = 1;
   }
-  auto before = [&](int i) { return V3(s_.x[i] - s_.dx_contact[i]); };
+  auto before = [&](int i) { return V3(s_.x[i] - s_.corr[i].dx_contact); };
   double du = 0;
   for (const int i : s_.shifted) {
     for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k) {
@@ -126,13 +126,14 @@ void Book<Real>::finish_step() {
     const double hm = 0.5 * model_.mass[i];
     ke += hm * double(s_.v[i].squaredNorm());
     const V3 vsum = s_.v_prev[i] + s_.v[i];
-    w_contact += hm * double(s_.dv_contact[i].dot(vsum));
-    w_friction += hm * double(s_.dv_friction[i].dot(vsum));
-    s_.dv_contact[i].setZero();  // ready for the next step's corrections
-    s_.dv_friction[i].setZero();
+    auto& c = s_.corr[i];
+    w_contact += hm * double(c.dv_contact.dot(vsum));
+    w_friction += hm * double(c.dv_friction.dot(vsum));
+    c.dv_contact.setZero();  // ready for the next step's corrections
+    c.dv_friction.setZero();
     if (ctx_.compressible) {
-      w_compress += hm * double(s_.dv_compress[i].dot(vsum));
-      s_.dv_compress[i].setZero();
+      w_compress += hm * double(c.dv_compress.dot(vsum));
+      c.dv_compress.setZero();
     }
   }
   // The projectile's friction touched only the nodes on it (in node order).

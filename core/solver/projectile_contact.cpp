@@ -52,7 +52,7 @@ void projectile_contact(const Model& model, State<Real>& s, RunState& run, Conte
         V3 dx = shift * nrm;
         zero_fixed(dx, model.fixed[i]);
         s.x[i] += dx;
-        s.dx_contact[i] += dx;
+        s.corr[i].dx_contact += dx;
       }
     }
     V3 dv_n = push * nrm;
@@ -69,7 +69,7 @@ void projectile_contact(const Model& model, State<Real>& s, RunState& run, Conte
     zero_fixed(dv_n, model.fixed[i]);
     s.v[i] += dv_n + dv_t;
     s.x[i] += dt * (dv_n + dv_t);
-    s.dv_contact[i] += dv_n;
+    s.corr[i].dv_contact += dv_n;
     s.dv_pfriction[i] += dv_t;
     impulse_normal -= Real(m) * dv_n;
     impulse_fric -= Real(m) * dv_t;

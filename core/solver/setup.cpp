@@ -13,13 +13,8 @@ State<Real> initial_state(const Model& model_, RunState& run_) {
   s_.v.resize(n);
   s_.f.resize(n);
   s_.v_prev.assign(n, V3::Zero());
-  s_.dv_contact.assign(n, V3::Zero());
-  s_.dv_friction.assign(n, V3::Zero());
-  if (model_.compression != CrossingCompression::rigid) {
-    s_.dv_compress.assign(n, V3::Zero());
-  }
+  s_.corr.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
   s_.dv_pfriction.assign(n, V3::Zero());
-  s_.dx_contact.assign(n, V3::Zero());
   s_.held_n.assign(n, V3::Zero());
   s_.held_flag.assign(n, 0);
   s_.pass_sum.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});

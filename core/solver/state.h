@@ -45,10 +45,15 @@ struct State {
   // --- Nodes (SPEC §1): x(t), v(t - dt/2) (leapfrog), the internal forces of the last
   // internal_forces, and v before this step's integrate (the corrections' work, finish_step).
   std::vector<V3> x, v, f, v_prev;
-  // This step's corrections, per mechanism (yarn contact normal and friction, projectile
-  // friction, position shifts, compression law): zeroed by finish_step once booked.
-  std::vector<V3> dv_contact, dv_friction, dv_pfriction, dx_contact;
-  std::vector<V3> dv_compress;  // (only when crossings are compressible)
+  // This step's corrections per node and mechanism, side by side (the finish pass adds to all
+  // four at once): the velocity changes of the normal contacts (yarn and projectile), of
+  // yarn-yarn friction and of the compression law, zeroed by finish_step once booked, and the
+  // position shifts, zeroed by integrate.
+  struct Corrections {
+    V3 dv_contact, dv_friction, dv_compress, dx_contact;
+  };
+  std::vector<Corrections> corr;
+  std::vector<V3> dv_pfriction;  // the projectile's friction (only the nodes it touched: ptouch_list)
   // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
   EnergyBook book;
   std::vector<double> cr_u;        // per crossing: the compression law's stored energy, end of the step
@@ -102,16 +107,13 @@ struct State {
   // Every field, in one list for writing and reading (StateWriter / StateReader).
   template <class Ar>
   void io(Ar& ar) {
-    ar.mark(0x52565332);  // "RVS2"
+    ar.mark(0x52565333);  // "RVS3"
     ar.vec(x);
     ar.vec(v);
     ar.vec(f);
     ar.vec(v_prev);
-    ar.vec(dv_contact);
-    ar.vec(dv_friction);
+    ar.vec(corr);
     ar.vec(dv_pfriction);
-    ar.vec(dx_contact);
-    ar.vec(dv_compress);
     ar.pod(book);
     ar.vec(cr_u);
     ar.vec(cr_stick_e);

@@ -12,6 +12,7 @@ struct YarnContact {
   using V3 = Eigen::Matrix<Real, 3, 1>;
   using LastPair = detail::LastPair<Real>;
   using PassSum = typename State<Real>::PassSum;
+  using Corrections = typename State<Real>::Corrections;
   const Model& model_;
   State<Real>& s_;
   RunState& run_;
@@ -129,7 +130,7 @@ struct YarnContact {
 
   void finish_pass(int lo, int hi);
 
-  void apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part);
+  void apply_impulse(int i, V3 P, V3 Corrections::*acc, bool hold, std::vector<V3>* part);
 
   void shift_node(int i, const V3& S, bool hold);
 
@@ -648,14 +649,14 @@ RAVEL_INLINE void YarnContact<Real>::gather(const CrossingImpulse& r, int lo, in
   };
   if (r.has_n)
     each(6, r.node, r.w, r.P, &PassSum::n,
-         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_contact, r.hold, nullptr); });
+         [&](int i, const V3& p) { apply_impulse(i, p, &Corrections::dv_contact, r.hold, nullptr); });
   if (r.has_f)
     each(4, r.fnode, r.fw, r.F, &PassSum::f,
-         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_friction, r.hold, &s_.held_fric); });
+         [&](int i, const V3& p) { apply_impulse(i, p, &Corrections::dv_friction, r.hold, &s_.held_fric); });
   if (r.has_s) each(6, r.node, r.w, r.S, &PassSum::s, [&](int i, const V3& dx) { shift_node(i, dx, r.hold); });
   if (r.has_c)
     each(6, r.node, r.w, r.C, &PassSum::c,
-         [&](int i, const V3& p) { apply_impulse(i, p, &s_.dv_compress, r.hold, &s_.held_comp); });
+         [&](int i, const V3& p) { apply_impulse(i, p, &Corrections::dv_compress, r.hold, &s_.held_comp); });
 }
 
 // Apply the pass's gathered sums to the nodes in [lo, hi).
@@ -666,6 +667,7 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
     const Real im = Real(model_.inv_mass[i]);
     const std::uint8_t fx = model_.fixed[i];
     PassSum& sum = s_.pass_sum[i];
+    Corrections& corr = s_.corr[i];
     V3 dvn = im * sum.n, dvf = im * sum.f, dx = im * sum.s;
     sum.n.setZero();
     sum.f.setZero();
@@ -681,13 +683,13 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
       sum.c.setZero();
       if (fx) zero_fixed(dvc, fx);
       dv += dvc;
-      s_.dv_compress[i] += dvc;
+      corr.dv_compress += dvc;
     }
     s_.v[i] += dv;
-    s_.dv_contact[i] += dvn;
-    s_.dv_friction[i] += dvf;
+    corr.dv_contact += dvn;
+    corr.dv_friction += dvf;
     s_.x[i] += dt * dv + dx;
-    s_.dx_contact[i] += dx;
+    corr.dx_contact += dx;
   }
 }
 
@@ -696,14 +698,14 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
 // (friction and compression, whose work on the projectile is their own; null: the normal
 // correction's).
 template <class Real>
-inline void YarnContact<Real>::apply_impulse(int i, V3 P, std::vector<V3>* acc, bool hold, std::vector<V3>* part) {
+inline void YarnContact<Real>::apply_impulse(int i, V3 P, V3 Corrections::*acc, bool hold, std::vector<V3>* part) {
   const Real im = Real(model_.inv_mass[i]);
   if (im == Real(0)) return;
   if (hold) pass_to_projectile(s_, i, P, part);  // (hold.h)
   V3 dv = im * P;
   zero_fixed(dv, model_.fixed[i]);
   s_.v[i] += dv;
-  if (acc) (*acc)[i] += dv;
+  s_.corr[i].*acc += dv;
   s_.x[i] += Real(model_.dt) * dv;  // the predicted position follows the velocity change (Eq 2)
 }
 
@@ -716,7 +718,7 @@ RAVEL_INLINE void YarnContact<Real>::shift_node(int i, const V3& S, bool hold) {
   if (hold) keep_out(s_, i, dx);  // not into the projectile that holds it (hold.h)
   zero_fixed(dx, model_.fixed[i]);
   s_.x[i] += dx;
-  s_.dx_contact[i] += dx;
+  s_.corr[i].dx_contact += dx;
 }
 
 // `first`: the step's first pass, which clears the crossings' per-step state.
