@@ -45,26 +45,11 @@ State<Real> initial_state(const Model& model_, RunState& run_) {
     s_.prev_strain[e] = mat;
   }
   const int nc = int(model_.crossings.size());
-  s_.cr_kw.resize(nc);
-  s_.cr_kf.resize(nc);
-  s_.cr_win.assign(nc, WindowIds{});
-  s_.cr_stick_w.assign(nc, -1.0);
-  s_.cr_stick_f.assign(nc, -1.0);
-  s_.cr_active.assign(nc, 1);
-  s_.cr_fn.assign(nc, 0.0);
-  s_.cr_ft.assign(nc, 0.0);
-  s_.cr_slip.assign(nc, 0.0);
-  s_.cr_gap.assign(nc, 0.0);
-  s_.cr_sliding.assign(nc, 0);
-  s_.cr_event.assign(nc, 0);
-  s_.cr_fn_step.assign(nc, 0.0);
-  s_.cr_u.assign(nc, 0.0);
-  s_.cr_stick_e.assign(nc, 0.0);
-  s_.cr_last.resize(nc);
+  s_.cr.assign(nc, CrossingState<Real>{});
   for (int c = 0; c < nc; ++c) {
-    s_.cr_kw[c] = model_.crossings[c].warp_node;
-    s_.cr_kf[c] = model_.crossings[c].weft_node;
-    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(model_, s_, c, s_.cr_kw[c], s_.cr_kf[c])};
+    s_.cr[c].kw = model_.crossings[c].warp_node;
+    s_.cr[c].kf = model_.crossings[c].weft_node;
+    s_.cr[c].last = {s_.cr[c].kw, s_.cr[c].kf, pair_offset(model_, s_, c, s_.cr[c].kw, s_.cr[c].kf)};
   }
   s_.xp = model_.projectile_x0.cast<Real>();
   s_.vp = (model_.impact_velocity * model_.flight_dir).template cast<Real>();

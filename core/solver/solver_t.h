@@ -107,28 +107,28 @@ class SolverT final : public Solver {
     return s_.broken_flag[e] != 0;
   }
   bool crossing_active(int c) const override {
-    return s_.cr_active[c] != 0;
+    return s_.cr[c].active != 0;
   }
   bool crossing_sliding(int c) const override {
-    return s_.cr_sliding[c] != 0;
+    return s_.cr[c].sliding != 0;
   }
   double crossing_normal_force(int c) const override {
-    return s_.cr_fn[c];
+    return s_.cr[c].fn;
   }
   double crossing_friction_force(int c) const override {
-    return s_.cr_ft[c];
+    return s_.cr[c].ft;
   }
   double crossing_slip_rate(int c) const override {
-    return s_.cr_slip[c];
+    return s_.cr[c].slip;
   }
   double crossing_gap(int c) const override {
-    return s_.cr_gap[c];
+    return s_.cr[c].gap;
   }
   int crossing_warp_node(int c) const override {
-    return s_.cr_kw[c];
+    return s_.cr[c].kw;
   }
   int crossing_weft_node(int c) const override {
-    return s_.cr_kf[c];
+    return s_.cr[c].kf;
   }
 
  protected:

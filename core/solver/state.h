@@ -38,6 +38,21 @@ struct LastPair {
   Eigen::Matrix<Real, 3, 1> offset;
 };
 
+// One crossing's state: the tracked nearest pair (node index along warp / weft) and its window
+// ids, the stick points (-1: none), last step's normal / friction force, slip rate and gap, the
+// normal force summed over this step's passes, the compression law's and the stick springs'
+// energy at the end of the step, the pair at the end of the last step, and flags.
+template <class Real>
+struct CrossingState {
+  int kw = 0, kf = 0;
+  WindowIds win;
+  double stick_w = -1, stick_f = -1;
+  double fn = 0, ft = 0, slip = 0, gap = 0, fn_step = 0;
+  double comp_u = 0, stick_e = 0;
+  LastPair<Real> last;
+  std::uint8_t active = 1, sliding = 0, event = 0;
+};
+
 template <class Real>
 struct State {
   using V3 = Eigen::Matrix<Real, 3, 1>;
@@ -56,8 +71,8 @@ struct State {
   std::vector<V3> dv_pfriction;  // the projectile's friction (only the nodes it touched: ptouch_list)
   // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
   EnergyBook book;
-  std::vector<double> cr_u;        // per crossing: the compression law's stored energy, end of the step
-  std::vector<double> cr_stick_e;  // per crossing: the stick penalty springs' energy (pass_friction)
+  // (per crossing, in CrossingState below: comp_u, the compression law's stored energy, and
+  // stick_e, the stick penalty springs' energy)
   // --- Nodes the projectile pushed out this step: the surface normal (zero: not held), the
   // impulse the yarn contact passed through them to the projectile (with the friction's and
   // the compression's shares), their list, the nodes the projectile touched (their
@@ -80,15 +95,8 @@ struct State {
   std::vector<std::uint8_t> broken_flag;
   std::vector<V3> elem_force, bend_force;
   std::vector<double> elem_energy;
-  // --- Crossings (SPEC §4): the tracked nearest pair (node index along warp / weft), its
-  // window ids, the stick points (-1: none), last step's normal / friction force, slip rate
-  // and gap, the normal force summed over this step's passes, the pair at the end of the last
-  // step, and flags.
-  std::vector<int> cr_kw, cr_kf;
-  std::vector<WindowIds> cr_win;
-  std::vector<double> cr_stick_w, cr_stick_f, cr_fn, cr_ft, cr_slip, cr_gap, cr_fn_step;
-  std::vector<LastPair<Real>> cr_last;
-  std::vector<std::uint8_t> cr_active, cr_sliding, cr_event;
+  // --- Crossings (SPEC §4), one record each (a crossing's step reads and writes most of it).
+  std::vector<CrossingState<Real>> cr;
   // --- Projectile (modelled part): position, velocity.
   V3 xp, vp;
   // --- Energy at half steps (solver.h, "Energy timing"): kinetic energy of v(t + dt/2), all
@@ -107,7 +115,7 @@ struct State {
   // Every field, in one list for writing and reading (StateWriter / StateReader).
   template <class Ar>
   void io(Ar& ar) {
-    ar.mark(0x52565333);  // "RVS3"
+    ar.mark(0x52565334);  // "RVS4"
     ar.vec(x);
     ar.vec(v);
     ar.vec(f);
@@ -115,8 +123,6 @@ struct State {
     ar.vec(corr);
     ar.vec(dv_pfriction);
     ar.pod(book);
-    ar.vec(cr_u);
-    ar.vec(cr_stick_e);
     ar.vec(held_n);
     ar.vec(held_imp);
     ar.vec(held_fric);
@@ -134,20 +140,7 @@ struct State {
     ar.vec(elem_force);
     ar.vec(bend_force);
     ar.vec(elem_energy);
-    ar.vec(cr_kw);
-    ar.vec(cr_kf);
-    ar.vec(cr_win);
-    ar.vec(cr_stick_w);
-    ar.vec(cr_stick_f);
-    ar.vec(cr_fn);
-    ar.vec(cr_ft);
-    ar.vec(cr_slip);
-    ar.vec(cr_gap);
-    ar.vec(cr_fn_step);
-    ar.vec(cr_last);
-    ar.vec(cr_active);
-    ar.vec(cr_sliding);
-    ar.vec(cr_event);
+    ar.vec(cr);
     ar.pod(xp);
     ar.pod(vp);
     ar.vec(shifted);
@@ -168,8 +161,8 @@ struct State {
     fnv1a(h, v.data(), v.size() * sizeof(V3));
     fnv1a(h, ev.data(), ev.size() * sizeof(Real));
     fnv1a(h, broken_flag.data(), broken_flag.size());
-    fnv1a(h, cr_stick_w.data(), cr_stick_w.size() * sizeof(double));
-    fnv1a(h, cr_stick_f.data(), cr_stick_f.size() * sizeof(double));
+    for (const auto& c : cr) fnv1a(h, &c.stick_w, sizeof(double));  // (the order of the arrays they were)
+    for (const auto& c : cr) fnv1a(h, &c.stick_f, sizeof(double));
     fnv1a(h, xp.data(), sizeof(V3));
     fnv1a(h, vp.data(), sizeof(V3));
   }

@@ -256,8 +256,8 @@ RAVEL_INLINE void YarnContact<Real>::load_window(const WindowIds& id, Window& w)
 // The window of crossing c around its tracked pair.
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::load_window(int c, Window& w) {
-  WindowIds& id = s_.cr_win[c];
-  if (id.kw != s_.cr_kw[c] || id.kf != s_.cr_kf[c]) id = window_ids(model_.crossings[c], s_.cr_kw[c], s_.cr_kf[c]);
+  WindowIds& id = s_.cr[c].win;
+  if (id.kw != s_.cr[c].kw || id.kf != s_.cr[c].kf) id = window_ids(model_.crossings[c], s_.cr[c].kw, s_.cr[c].kf);
   load_window(id, w);
 }
 
@@ -287,21 +287,21 @@ inline bool YarnContact<Real>::track(int c, Window& w, bool loaded) {
       }
     }
     if (bw == 1 && bf == 1) break;
-    s_.cr_kw[c] += bw - 1;
-    s_.cr_kf[c] += bf - 1;
+    s_.cr[c].kw += bw - 1;
+    s_.cr[c].kf += bf - 1;
     if (round >= 1) skipped = true;
-    load_window(cr, s_.cr_kw[c], s_.cr_kf[c], w);
+    load_window(cr, s_.cr[c].kw, s_.cr[c].kf, w);
   }
   return skipped;
 }
 
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::release(int c, std::uint8_t why) {
-  s_.cr_active[c] = 0;
-  s_.cr_stick_e[c] = 0;  // the penalty spring lets go (its energy then shows as friction work)
-  s_.cr_fn[c] = s_.cr_ft[c] = s_.cr_slip[c] = 0;
-  s_.cr_sliding[c] = 0;
-  s_.cr_event[c] |= why;
+  s_.cr[c].active = 0;
+  s_.cr[c].stick_e = 0;  // the penalty spring lets go (its energy then shows as friction work)
+  s_.cr[c].fn = s_.cr[c].ft = s_.cr[c].slip = 0;
+  s_.cr[c].sliding = 0;
+  s_.cr[c].event |= why;
 }
 
 template <class Real>
@@ -521,7 +521,7 @@ template <class Real>
 void YarnContact<Real>::run() {
   const int nc = int(model_.crossings.size());
   const int N = model_.contact_iterations;
-  ctx_.impulses.resize(nc);  // (s_.cr_fn_step, s_.cr_ft and s_.cr_event are cleared by each crossing's first pass)
+  ctx_.impulses.resize(nc);  // (each crossing's fn_step, ft, event and comp_u are cleared by its first pass)
   for (int pass = 1; pass <= N; ++pass) {
     // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
     const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
@@ -576,20 +576,20 @@ void YarnContact<Real>::run() {
   for (int c = 0; c < nc; ++c) {
     // How far the two yarns' material moved against each other this step: the offset of
     // last step's tracked node pair, then and now (the pair may have been re-chosen since).
-    const LastPair was = s_.cr_last[c];
+    const LastPair was = s_.cr[c].last;
     const Real moved = (pair_offset(model_, s_, c, was.kw, was.kf) - was.offset).norm();
-    s_.cr_last[c] = {s_.cr_kw[c], s_.cr_kf[c], pair_offset(model_, s_, c, s_.cr_kw[c], s_.cr_kf[c])};
-    if (s_.cr_active[c]) {
-      fsum += s_.cr_fn[c];
-      usum += s_.cr_u[c];
-      esum += s_.cr_stick_e[c];
-      if (s_.cr_fn[c] > 0) (s_.cr_sliding[c] ? sliding : stuck)++;
+    s_.cr[c].last = {s_.cr[c].kw, s_.cr[c].kf, pair_offset(model_, s_, c, s_.cr[c].kw, s_.cr[c].kf)};
+    if (s_.cr[c].active) {
+      fsum += s_.cr[c].fn;
+      usum += s_.cr[c].comp_u;
+      esum += s_.cr[c].stick_e;
+      if (s_.cr[c].fn > 0) (s_.cr[c].sliding ? sliding : stuck)++;
       // Material slip: the stick point's advance, but never faster than the yarns move
       // against each other (a jump of the closest point along a kinked or re-paired
       // yarn is not slip).
-      s_.cr_slip[c] = std::min(s_.cr_slip[c], double(moved) / double(model_.dt));
+      s_.cr[c].slip = std::min(s_.cr[c].slip, double(moved) / double(model_.dt));
     }
-    std::uint8_t ev = s_.cr_event[c];
+    std::uint8_t ev = s_.cr[c].event;
     if (!ev) continue;
     const Crossing& cr = model_.crossings[c];
     auto note = [&](long& count, double& t, int& i, int& j) {
@@ -729,19 +729,19 @@ inline void YarnContact<Real>::crossing_batch(int c0, int c1, Real alpha, bool f
   bool on[kBatch];
   bool tracked[kBatch];
   if (first) {
-    for (int c = c0; c < c1; ++c) s_.cr_fn_step[c] = 0, s_.cr_ft[c] = 0, s_.cr_event[c] = 0, s_.cr_u[c] = 0;
+    for (int c = c0; c < c1; ++c) s_.cr[c].fn_step = 0, s_.cr[c].ft = 0, s_.cr[c].event = 0, s_.cr[c].comp_u = 0;
   }
   for (int c = c0; c < c1; ++c) {
     const int k = c - c0;
     CrossingImpulse& r = out[k];
     r.has_n = r.has_f = r.has_s = r.has_c = r.hold = r.any_held = false;
-    on[k] = s_.cr_active[c];
+    on[k] = s_.cr[c].active;
     tracked[k] = false;
     if (!on[k]) continue;
     load_window(c, w[k]);
     // Windows the lanes take are searched there (and here again only if the pair moves).
     if (lane_window(w[k])) continue;
-    if (track(c, w[k], true)) s_.cr_event[c] |= ev_skip;
+    if (track(c, w[k], true)) s_.cr[c].event |= ev_skip;
     tracked[k] = true;
   }
   lanes::ClosestBatch lb;
@@ -750,7 +750,7 @@ inline void YarnContact<Real>::crossing_batch(int c0, int c1, Real alpha, bool f
     const int k = c - c0;
     if (!on[k] || tracked[k] || !g[k].moved) continue;
     // The nearest pair moved: the one-crossing search from here, then its closest points.
-    if (track(c, w[k], true)) s_.cr_event[c] |= ev_skip;
+    if (track(c, w[k], true)) s_.cr[c].event |= ev_skip;
     g[k] = closest(model_.crossings[c], w[k]);
   }
   // The rest of each crossing, in three stages over the batch: each stage is a chain of
@@ -816,7 +816,7 @@ RAVEL_INLINE bool YarnContact<Real>::pass_normal(int c, Real alpha, bool last, c
     delta = D - g.dist;
     u = dlen > Real(1e-12) * D ? unit_d() : n;
   } else {
-    if (g.dist > D && s_.cr_gap[c] > 0) {
+    if (g.dist > D && s_.cr[c].gap > 0) {
       // On the "wrong" side by more than D, but apart (|d| > D) at the end of the last
       // step too: the yarns never came within D of each other, so they did not pass
       // through each other (that takes far less than D of relative motion per step); the
@@ -903,8 +903,8 @@ RAVEL_INLINE bool YarnContact<Real>::pass_normal(int c, Real alpha, bool last, c
     r.has_n = P > Real(0);
   }
   if (compliant) compress(c, alpha, last, std::min(span, span - delta), span, winv, P, approach, u, r);
-  s_.cr_fn_step[c] += double(P / dt);  // Eq 11
-  if (last) s_.cr_gap[c] = double(g.dist - D);
+  s_.cr[c].fn_step += double(P / dt);  // Eq 11
+  if (last) s_.cr[c].gap = double(g.dist - D);
   return true;
 }
 
@@ -925,7 +925,7 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
   const Crossing& cr = model_.crossings[c];
   const double dt = model_.dt;
   const double kap = dt * dt * double(winv), Fh = cr.compression_force;
-  const double f_acc = s_.cr_fn_step[c] + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
+  const double f_acc = s_.cr[c].fn_step + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
   const double b = kap * (f_acc + Fh) - sp, k4 = 4 * kap * Fh * sz;
   const double root = std::sqrt(b * b + k4);
   double s = b > 0 ? 0.5 * k4 / (b + root) : 0.5 * (root - b);  // the positive root, without cancellation
@@ -935,7 +935,7 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
   // A closure beyond that was there before the step (a yarn end snapping in, a tracking
   // move, a neighbour's shift): as with rigid contact, it is removed by moving the nodes,
   // with the force capped and the distance the law's at that force.
-  const double qv_max = kap * (s_.cr_fn[c] + double(approach) / (dt * double(winv)) - f_acc);
+  const double qv_max = kap * (s_.cr[c].fn + double(approach) / (dt * double(winv)) - f_acc);
   if (model_.split_penetration && q > std::max(0.0, qv_max)) {
     qv = std::max(0.0, qv_max);
     s = Fh * sz / (f_acc + qv / kap + Fh);
@@ -949,7 +949,7 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
     const Real Pc = Real(double(alpha) * qv / (dt * double(winv)));
     r.C = Pc * u;
     r.has_c = Pc > Real(0);
-    s_.cr_fn_step[c] += double(Pc) / dt;
+    s_.cr[c].fn_step += double(Pc) / dt;
   } else {
     q = 0;
   }
@@ -957,7 +957,7 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
     // The law's stored energy at the distance this crossing now enforces:
     // integral of F_half (span / x - 1) dx from s to span.
     const double se = std::min(sz, sp + q);
-    s_.cr_u[c] = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
+    s_.cr[c].comp_u = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
   }
 }
 
@@ -986,7 +986,7 @@ RAVEL_INLINE void YarnContact<Real>::friction_setup(int c, const Window& w, cons
     s.cf = chord_coord(cr.weft_yarn, kf, w.xf, w.fseg, pa, s.Tf);
     s.lw = s.lf = KnownLengths{};
   }
-  if (s_.cr_stick_w[c] < 0) s_.cr_stick_w[c] = s.cw, s_.cr_stick_f[c] = s.cf;
+  if (s_.cr[c].stick_w < 0) s_.cr[c].stick_w = s.cw, s_.cr[c].stick_f = s.cf;
   Real fa, fb;
   coord_nodes(cr.warp_yarn, s.cw, r.fnode[0], r.fnode[1], fa);
   coord_nodes(cr.weft_yarn, s.cf, r.fnode[2], r.fnode[3], fb);
@@ -1005,7 +1005,7 @@ RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last,
   const Crossing& cr = model_.crossings[c];
   const Real dt = Real(model_.dt);
   const double fwinv = s.fwinv;
-  const double fn = s_.cr_fn_step[c];
+  const double fn = s_.cr[c].fn_step;
   const double limit = model_.friction * fn;
   double ft_w = 0, ft_f = 0, moved = 0, stored = 0;
   bool slid = false;
@@ -1027,21 +1027,21 @@ RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last,
       }
       stored += force * force / (2 * K);  // the penalty spring K/2 e^2 (stick_energy)
     };
-    one_yarn(cr.warp_yarn, s.cw, s_.cr_stick_w[c], ft_w, s.lw);
-    one_yarn(cr.weft_yarn, s.cf, s_.cr_stick_f[c], ft_f, s.lf);
+    one_yarn(cr.warp_yarn, s.cw, s_.cr[c].stick_w, ft_w, s.lw);
+    one_yarn(cr.weft_yarn, s.cf, s_.cr[c].stick_f, ft_f, s.lf);
   }
   if (ft_w != 0 || ft_f != 0) {
     // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
     const V3 Fwarp = Real(ft_w) * s.Tw - Real(ft_f) * s.Tf;
     r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
     r.has_f = true;
-    s_.cr_ft[c] = double(Fwarp.norm());
+    s_.cr[c].ft = double(Fwarp.norm());
   }
   if (last) {
-    s_.cr_sliding[c] = slid;
-    s_.cr_slip[c] = moved / double(dt);
-    s_.cr_fn[c] = fn;
-    s_.cr_stick_e[c] = stored;
+    s_.cr[c].sliding = slid;
+    s_.cr[c].slip = moved / double(dt);
+    s_.cr[c].fn = fn;
+    s_.cr[c].stick_e = stored;
   }
 }
 
@@ -1059,7 +1059,7 @@ void YarnContact<Real>::residual_penetration() {
     ContactGeom g[kBatch];
     bool on[kBatch];
     for (int c = c0; c < c1; ++c) {
-      on[c - c0] = s_.cr_active[c];
+      on[c - c0] = s_.cr[c].active;
       if (on[c - c0]) load_window(c, w[c - c0]);
     }
     lanes::ClosestBatch lb;
