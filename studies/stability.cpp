@@ -64,6 +64,16 @@ std::vector<StabilityMapSpec> default_stability_maps(bool quick) {
   fr.y = {"yarn.friction", {"0.2", "1", "10"}};
   fr.fixed = {"solver.model=sliding"};
   m.push_back(fr);
+  // The stick penalty alpha_f (docs/MODEL.md §4): stiff springs are less stable at very high
+  // friction, soft ones can feed energy into the yarns (friction work below zero: warned).
+  StabilityMapSpec fp;
+  fp.name = "friction_penalty";
+  fp.title = "Stick penalty at low to very high friction (sliding)";
+  fp.x = {"solver.friction_penalty", quick ? std::vector<std::string>{"0.25", "0.5", "1"}
+                                           : std::vector<std::string>{"0.1", "0.25", "0.5", "0.75", "1"}};
+  fp.y = {"yarn.friction", {"0.2", "1", "10"}};
+  fp.fixed = {"solver.model=sliding"};
+  m.push_back(fp);
   StabilityMapSpec v;
   v.name = "velocity";
   v.title = "Impact velocity and time-step factor (sliding)";
@@ -97,12 +107,13 @@ StabilityCell classify_summary(const std::string& text) {
     c.diagnosis = "status " + r.status + ": " + r.diagnosis;
     return c;
   }
-  std::string search, pass;
+  std::string search, pass, friction;
   for (const auto& t : r.warnings) {
     if (t.find("slid more than one node") != std::string::npos) search = t;
     if (t.find("passed through") != std::string::npos) pass = t;
+    if (t.find("friction work went below zero") != std::string::npos) friction = t;
   }
-  if (!search.empty() || !pass.empty()) {
+  if (!search.empty() || !pass.empty() || !friction.empty()) {
     c.status = "warned";
     // "... slid more than one node in one step N times ..." / "N crossings found with yarns passed through ..."
     auto count_after = [](const std::string& t, const std::string& marker) {
@@ -112,8 +123,19 @@ StabilityCell classify_summary(const std::string& text) {
     if (!search.empty()) c.detail = "search " + count_after(search, "in one step ");
     if (!pass.empty())
       c.detail += (c.detail.empty() ? "" : ", ") + std::string("pass ") + std::to_string(std::atol(pass.c_str()));
-    c.cause = !search.empty() ? (!pass.empty() ? "search+pass" : "search") : "pass_through";
+    c.cause = !search.empty() ? (!pass.empty() ? "search+pass" : "search") : !pass.empty() ? "pass_through" : "";
     c.diagnosis = search + (search.empty() || pass.empty() ? "" : "; ") + pass;
+    if (!friction.empty()) {
+      // "yarn-yarn friction work went below zero (-0.208 J at t = 52 us, ...": the method fed
+      // energy in where it should dissipate.
+      c.cause += c.cause.empty() ? "friction_negative" : "+friction_negative";
+      const auto at = friction.find("below zero (");
+      c.detail +=
+          (c.detail.empty() ? "" : ", ") +
+          (at == std::string::npos ? std::string("friction < 0")
+                                   : "friction " + friction.substr(at + 12, friction.find(" J", at) - at - 12) + " J");
+      c.diagnosis += (c.diagnosis.empty() ? "" : "; ") + friction;
+    }
     return c;
   }
   c.status = "stable";
@@ -279,7 +301,7 @@ std::vector<std::pair<std::string, Chart>> stability_charts(const std::vector<St
     ch.subtitle += std::to_string(counts[0]) + " stable, " + std::to_string(counts[1]) + " warned, " +
                    std::to_string(counts[2]) + " diverged" +
                    (counts[3] ? ", " + std::to_string(counts[3]) + " failed" : "") +
-                   " (warned: yarns slid > 1 node in a step, or passed through)";
+                   " (warned: slid > 1 node, passed through, or friction < 0)";
     ch.x = {xk, ""};
     ch.y = {yk, ""};
     for (const auto& k : scene_keys()) {
@@ -354,7 +376,8 @@ std::string stability_markdown(const StabilityResult& r, const StabilityOptions&
                    ". Every cell is one run to its end "
                    "(perforation, rebound or the scene's end time): **stable** (completed, assumptions held), "
                    "**warned** (completed, but the nearest-pair search saw yarns slide more than one node in a step "
-                   "or pass through each other), **diverged** (the solver stopped it; cause in the cell), "
+                   "or pass through each other, or the yarn-yarn friction work went below zero), **diverged** (the "
+                   "solver stopped it; cause in the cell), "
                    "**failed** (could not run).\n\n";
   for (const auto& m : r.maps) {
     md += "## " + m.title + "\n\n";

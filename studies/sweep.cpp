@@ -421,9 +421,11 @@ SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case
     }
     if (!changed.empty()) {
       if (!opt.restart)
-        throw StudyError("--out " + opt.out_dir + ": holds finished cases of a different sweep (" + changed +
-                         "); rerun with the same scene, --set and ravel to resume, --restart to start over, or use "
-                         "another folder");
+        throw StudyError(
+            "--out " + opt.out_dir + ": holds finished cases of a different sweep (" + changed +
+            "); rerun with the same scene, --set and ravel to resume, " +
+            std::string(opt.offers_restart ? "--restart to start over, " : "remove the folder to start over, ") +
+            "or use another folder");
       std::error_code ec;
       for (const auto& d : all_cases)
         if (fs::exists(case_dir(opt.out_dir, d) + "/case.json", ec)) fs::remove_all(case_dir(opt.out_dir, d), ec);

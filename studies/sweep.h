@@ -71,6 +71,8 @@ struct SweepOptions {
   // The folder holds finished cases of another sweep (another scene, --set, scene file
   // content or ravel build): false refuses to mix them in, true removes them first.
   bool restart = false;
+  // Whether the command offers --restart (the refusal above says so only then).
+  bool offers_restart = false;
 };
 
 // One finished (or previously finished) case.

@@ -89,6 +89,7 @@ int cmd_sweep(const Args& args) {
     opt.solver_threads = a.threads >= 0 ? a.threads : 1;
     opt.extend_undecided = !has_switch(a, "no-extend");
     opt.restart = has_switch(a, "restart");
+    opt.offers_restart = true;
     if (a.flags.count("shard")) opt.shard = studies::parse_shard(a.flags["shard"]);
     std::vector<studies::Vary> vary;
     std::vector<std::string> keys;

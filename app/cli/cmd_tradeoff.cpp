@@ -172,7 +172,7 @@ int cmd_stability(const Args& args) {
         bool found = false;
         for (const auto& m : opt.maps)
           if (m.name == name) keep.push_back(m), found = true;
-        if (!found) throw UsageError("--map " + name + ": expected dt_factor, friction or velocity");
+        if (!found) throw UsageError("--map " + name + ": expected dt_factor, friction, friction_penalty or velocity");
       }
       opt.maps = keep;
     }

@@ -144,7 +144,7 @@ std::vector<Command> make_table() {
                 kThreads,
                 kJobs,
                 {"quick", nullptr, false, "coarser maps"},
-                {"map", "NAME", true, "only this map: dt_factor, friction or velocity (repeatable)"},
+                {"map", "NAME", true, "only this map: dt_factor, friction, friction_penalty or velocity (repeatable)"},
                 kQuiet}});
   t.push_back({"help", "ravel help [COMMAND]", "this text, or one command's options", {}});
   return t;

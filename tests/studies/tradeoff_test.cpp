@@ -135,6 +135,15 @@ TEST(Stability, ClassifiesWarnings) {
       R"({"status": "completed", "warnings": ["2 crossings found with yarns passed through each other"]})");
   EXPECT_EQ(p.status, "warned");
   EXPECT_EQ(p.cause, "pass_through");
+  const auto f = classify_summary(
+      R"({"status": "completed", "warnings": ["yarn-yarn friction work went below zero (-0.208 J at t = 52 us, 0.088 % of the initial energy): ..."]})");
+  EXPECT_EQ(f.status, "warned");
+  EXPECT_EQ(f.cause, "friction_negative");
+  EXPECT_EQ(f.detail, "friction -0.208 J");
+  const auto sf = classify_summary(
+      R"({"status": "completed", "warnings": ["nearest-pair search: yarns slid more than one node in one step 1 times", "yarn-yarn friction work went below zero (-42.8 J at t = 98 us, 18 % of the initial energy): ..."]})");
+  EXPECT_EQ(sf.cause, "search+friction_negative");
+  EXPECT_EQ(sf.detail, "search 1, friction -42.8 J");
   const auto ok = classify_summary(R"({"status": "completed", "warnings": ["3 crossings ravelled out"]})");
   EXPECT_EQ(ok.status, "stable");  // ravelling is physics, not a broken method
   const auto d = classify_summary(R"({"status": "diverged", "divergence_cause": "energy_balance", "diagnosis": "x"})");
