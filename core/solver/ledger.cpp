@@ -40,13 +40,13 @@ struct Book {
 
 // The ledger at t - dt/2 (EnergyBook::close_row), and the energy-balance check on it.
 template <class Real>
-void close_ledger_row(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx) {
+void close_ledger_row(const Model& model, State<Real>& s, RunState& run, double max_balance_error) {
   if (run.steps == 0) {
     s.book.start();
     return;
   }
   s.book.close_row(run.ledger);
-  check_balance(model, s, run, ctx.max_balance_error, run.ledger.total());
+  check_balance(model, s, run, max_balance_error, run.ledger.total());
 }
 
 template <class Real>
@@ -162,8 +162,8 @@ void finish_step(const Model& model, State<Real>& s, RunState& run, const Contex
 }
 
 // The two precisions (solver.h: Precision).
-template void close_ledger_row(const Model&, State<float>&, RunState&, const Context<float>&);
-template void close_ledger_row(const Model&, State<double>&, RunState&, const Context<double>&);
+template void close_ledger_row(const Model&, State<float>&, RunState&, double);
+template void close_ledger_row(const Model&, State<double>&, RunState&, double);
 template double fabric_ke(const Model&, const State<float>&);
 template double fabric_ke(const Model&, const State<double>&);
 template void finish_step(const Model&, State<float>&, RunState&, const Context<float>&);

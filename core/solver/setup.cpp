@@ -5,62 +5,63 @@
 namespace ravel::detail {
 
 template <class Real>
-State<Real> initial_state(const Model& model_, RunState& run_) {
+State<Real> initial_state(const Model& model, const Context<Real>& ctx, RunState& run) {
   using V3 = Eigen::Matrix<Real, 3, 1>;
-  State<Real> s_;
-  const int n = model_.node_count, ne = model_.element_count;
-  s_.x.resize(n);
-  s_.v.resize(n);
-  s_.f.resize(n);
-  s_.v_prev.assign(n, V3::Zero());
-  s_.corr.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
-  s_.dv_pfriction.assign(n, V3::Zero());
-  s_.held_n.assign(n, V3::Zero());
-  s_.held_flag.assign(n, 0);
-  s_.pass_sum.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
-  s_.held_imp.assign(n, V3::Zero());
-  s_.held_fric.assign(n, V3::Zero());
-  s_.held_comp.assign(n, V3::Zero());
+  State<Real> s;
+  const int n = model.node_count, ne = model.element_count;
+  s.x.resize(n);
+  s.v.resize(n);
+  s.f.resize(n);
+  s.v_prev.assign(n, V3::Zero());
+  s.corr.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
+  s.dv_pfriction.assign(n, V3::Zero());
+  s.held_n.assign(n, V3::Zero());
+  s.held_flag.assign(n, 0);
+  s.pass_sum.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
+  s.held_imp.assign(n, V3::Zero());
+  s.held_fric.assign(n, V3::Zero());
+  s.held_comp.assign(n, V3::Zero());
   for (int i = 0; i < n; ++i) {
-    s_.x[i] = model_.x0[i].template cast<Real>();
-    s_.v[i].setZero();
-    s_.f[i].setZero();
+    s.x[i] = model.x0[i].template cast<Real>();
+    s.v[i].setZero();
+    s.f[i].setZero();
   }
-  s_.strain.assign(ne, Real(0));
-  s_.prev_strain.assign(ne, Real(0));
-  s_.ev.assign(ne, Real(0));
-  s_.stress.assign(ne, Real(0));
-  s_.crimp_damp_stress.assign(model_.crimp_damping_beta * model_.modulus_inst > 0 ? ne : 0, Real(0));
-  s_.broken_flag.assign(ne, 0);
-  s_.elem_force.assign(ne, V3::Zero());
-  s_.elem_energy.assign(ne, 0.0);
-  s_.bend_force.assign(model_.bend_k.size(), V3::Zero());
+  s.strain.assign(ne, Real(0));
+  s.prev_strain.assign(ne, Real(0));
+  s.ev.assign(ne, Real(0));
+  s.stress.assign(ne, Real(0));
+  s.crimp_damp_stress.assign(ctx.crimp_damping_k > 0 ? ne : 0, Real(0));
+  s.broken_flag.assign(ne, 0);
+  s.elem_force.assign(ne, V3::Zero());
+  s.elem_energy.assign(ne, 0.0);
+  s.bend_force.assign(model.bend_k.size(), V3::Zero());
   for (int e = 0; e < ne; ++e) {
     // Initial strain (slack for the straight-chord models).
-    const Real len = (s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]]).norm();
-    Real eps = len / Real(model_.elem_rest[e]) - Real(1), mat = eps,
+    const Real len = (s.x[model.elem_b[e]] - s.x[model.elem_a[e]]).norm();
+    Real eps = len / Real(model.elem_rest[e]) - Real(1), mat = eps,
          dg = Real(1);  // (eps: the yarn's own strain after crimp_stage)
-    if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
-    s_.strain[e] = eps;
-    s_.prev_strain[e] = mat;
+    if (model.crimp_strain > 0) crimp_stage(model, eps, mat, dg);
+    s.strain[e] = eps;
+    s.prev_strain[e] = mat;
   }
-  const int nc = int(model_.crossings.size());
-  s_.cr.assign(nc, CrossingState<Real>{});
+  const int nc = int(model.crossings.size());
+  s.cr.assign(nc, CrossingState<Real>{});
   for (int c = 0; c < nc; ++c) {
-    s_.cr[c].kw = model_.crossings[c].warp_node;
-    s_.cr[c].kf = model_.crossings[c].weft_node;
-    s_.cr[c].last = {s_.cr[c].kw, s_.cr[c].kf, pair_offset(model_, s_, c, s_.cr[c].kw, s_.cr[c].kf)};
+    s.cr[c].kw = model.crossings[c].warp_node;
+    s.cr[c].kf = model.crossings[c].weft_node;
+    s.cr[c].last = {s.cr[c].kw, s.cr[c].kf, pair_offset(model, s, c, s.cr[c].kw, s.cr[c].kf)};
   }
-  s_.xp = model_.projectile_x0.cast<Real>();
-  s_.vp = (model_.impact_velocity * model_.flight_dir).template cast<Real>();
+  s.xp = model.projectile_x0.cast<Real>();
+  s.vp = (model.impact_velocity * model.flight_dir).template cast<Real>();
   // Initial ledger: all energy is the projectile's.
-  s_.book.ke_half = 0.5 * model_.projectile_mass * double(s_.vp.squaredNorm());
-  run_.ledger.projectile_ke_J = s_.book.ke_half;
-  return s_;
+  s.book.ke_half = 0.5 * model.projectile_mass * double(s.vp.squaredNorm());
+  run.ledger.projectile_ke_J = s.book.ke_half;
+  return s;
 }
 
 template <class Real>
-SolverT<Real>::SolverT(const Model& m, int threads) : Solver(m), s_(initial_state<Real>(model_, run_)), ctx_(model_) {
+SolverT<Real>::SolverT(const Model& m, int threads)
+    : Solver(m), ctx_(model_), s_(initial_state<Real>(model_, ctx_, run_)) {
   set_threads(threads);
 }
 
@@ -69,33 +70,33 @@ SolverT<Real>::SolverT(const Model& m, int threads) : Solver(m), s_(initial_stat
 // node -> (bending spring, weight) lists, so forces are gathered per node: race-free in
 // parallel and independent of the thread count.
 template <class Real>
-Context<Real>::Context(const Model& model_)
+Context<Real>::Context(const Model& model)
     : simd(lanes_possible<Real>()),
-      zener(ZenerConstants{model_.k1 > 0 ? model_.k1 : 1, model_.k2 > 0 ? model_.k2 : 1,
-                           model_.damping > 0 ? model_.damping : 1},
-            model_.dt),
-      compressible(model_.compression != CrossingCompression::rigid),
-      escape_radius2(std::pow(10.0 * (model_.half_width + model_.half_length) + 1.0, 2)),
-      damping_k(model_.element_damping_beta * model_.modulus_inst),
-      crimp_damping_k(model_.crimp_damping_beta * model_.modulus_inst) {
-  const int n = model_.node_count;
+      zener(ZenerConstants{model.k1 > 0 ? model.k1 : 1, model.k2 > 0 ? model.k2 : 1,
+                           model.damping > 0 ? model.damping : 1},
+            model.dt),
+      compressible(model.compression != CrossingCompression::rigid),
+      escape_radius2(std::pow(10.0 * (model.half_width + model.half_length) + 1.0, 2)),
+      damping_k(model.element_damping_beta * model.modulus_inst),
+      crimp_damping_k(model.crimp_damping_beta * model.modulus_inst) {
+  const int n = model.node_count;
   std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
-  for (int e = 0; e < model_.element_count; ++e) {
-    ne[model_.elem_b[e]].push_back({e, Real(1)});  // element force acts on b, -force on a
-    ne[model_.elem_a[e]].push_back({e, Real(-1)});
+  for (int e = 0; e < model.element_count; ++e) {
+    ne[model.elem_b[e]].push_back({e, Real(1)});  // element force acts on b, -force on a
+    ne[model.elem_a[e]].push_back({e, Real(-1)});
   }
-  for (size_t s = 0; s < model_.bend_k.size(); ++s) {
+  for (size_t s = 0; s < model.bend_k.size(); ++s) {
     // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
-    const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
-    if (model_.bend_mirror[s] >= 0) {
+    const int e1 = model.bend_e1[s], e2 = model.bend_e2[s];
+    if (model.bend_mirror[s] >= 0) {
       // Mirror spring: State::bend_force is the force on this element's midpoint.
-      nb[model_.elem_a[e1]].push_back({int(s), Real(0.5)});
-      nb[model_.elem_b[e1]].push_back({int(s), Real(0.5)});
+      nb[model.elem_a[e1]].push_back({int(s), Real(0.5)});
+      nb[model.elem_b[e1]].push_back({int(s), Real(0.5)});
       continue;
     }
     // Adjoining elements share a node, which gets -F/2 and +F/2 of the same spring: no
     // force, and no entry (adding and taking away the same half would only round).
-    const int ends[4] = {model_.elem_a[e1], model_.elem_b[e1], model_.elem_a[e2], model_.elem_b[e2]};
+    const int ends[4] = {model.elem_a[e1], model.elem_b[e1], model.elem_a[e2], model.elem_b[e2]};
     for (int k = 0; k < 4; ++k) {
       const bool shared =
           (k < 2 ? (ends[k] == ends[2] || ends[k] == ends[3]) : (ends[k] == ends[0] || ends[k] == ends[1]));

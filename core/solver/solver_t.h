@@ -51,12 +51,11 @@ class SolverT final : public Solver {
 
   void step() override {
     if (!run_.divergence.empty()) return;
-    ctx_.max_balance_error = max_balance_error_;
     const Model& m = model_;
-    internal_forces(m, s_, run_, ctx_);     // Eq 3, 23: element stress from strain; bending; failure
-    close_ledger_row(m, s_, run_, ctx_);    // ledger at t - dt/2
-    integrate(m, s_, run_, ctx_);           // Eq 1-2
-    projectile_contact(m, s_, run_, ctx_);  // Eq 18-22
+    internal_forces(m, s_, run_, ctx_);                 // Eq 3, 23: element stress from strain; bending; failure
+    close_ledger_row(m, s_, run_, max_balance_error_);  // ledger at t - dt/2
+    integrate(m, s_, run_, ctx_);                       // Eq 1-2
+    projectile_contact(m, s_, run_, ctx_);              // Eq 18-22
     if (!m.crossings.empty()) yarn_contact(m, s_, run_, ctx_);  // Eq 5-17
     release_held(m, s_, run_);                                  // the yarn contact's push on held nodes -> projectile
     if (!m.crossings.empty() && run_.steps % kPenetrationCheckEvery == 0) residual_penetration(m, s_, run_, ctx_);
@@ -149,8 +148,8 @@ class SolverT final : public Solver {
   void hash_into(std::uint64_t& h) const override;
 
  private:
-  State<Real> s_;      // the run's dynamic state (plain data: copied, hashed and written as one)
   Context<Real> ctx_;  // what the model and the options determine, and the per-step scratch
+  State<Real> s_;      // the run's dynamic state (plain data: copied, hashed and written as one)
 };
 
 }  // namespace ravel::detail

@@ -67,10 +67,9 @@ struct Context {
   // Node -> (element, sign) and node -> (bending spring, weight), in CSR form.
   std::vector<int> inc_e_off, inc_b_off;
   std::vector<std::pair<int, Real>> inc_e, inc_b;
-  double escape_radius2 = 1;        // a node farther than this (squared) from the centre has escaped
-  double damping_k = 0;             // beta E_inst of the snap damping (solver.snap_damping)
-  double crimp_damping_k = 0;       // the same for yarn.crimp_damping
-  double max_balance_error = 0.05;  // |ledger total - initial| / initial above this: a fault
+  double escape_radius2 = 1;   // a node farther than this (squared) from the centre has escaped
+  double damping_k = 0;        // beta E_inst of the snap damping (solver.snap_damping)
+  double crimp_damping_k = 0;  // the same for yarn.crimp_damping
 
   // --- Per-step scratch: what a stage needs within a step and forgets.
   std::vector<int> near;                    // projectile_contact: nodes in its bounding box
@@ -162,9 +161,10 @@ void check_positions(RunState& run, double escape_radius2, double max_r2);
 template <class Real>
 void internal_forces(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx);
 
-// ledger.cpp: the ledger row at t - dt/2 and the energy-balance check on it.
+// ledger.cpp: the ledger row at t - dt/2 and the energy-balance check on it (a fault beyond
+// max_balance_error: Solver::set_max_balance_error).
 template <class Real>
-void close_ledger_row(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx);
+void close_ledger_row(const Model& model, State<Real>& s, RunState& run, double max_balance_error);
 
 // integrate.cpp: Eq 1-2, the free update of the nodes and the projectile.
 template <class Real>
@@ -203,6 +203,6 @@ double fabric_ke(const Model& model, const State<Real>& s);
 
 // setup.cpp: the initial state of a model.
 template <class Real>
-State<Real> initial_state(const Model& model, RunState& run);
+State<Real> initial_state(const Model& model, const Context<Real>& ctx, RunState& run);
 
 }  // namespace ravel::detail
