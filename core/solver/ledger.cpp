@@ -11,7 +11,7 @@ struct Book {
   const Model& model_;
   State<Real>& s_;
   RunState& run_;
-  const Context<Real>& ctx_;
+  Context<Real>& ctx_;
 
   double shift_energy();
   double element_energy_at(int e, Real len) const;
@@ -66,10 +66,9 @@ double fabric_ke(const Model& model, const State<Real>& s) {
 // where whipping yarn ends were shifted tens of um per step at 200 m/s.)
 template <class Real>
 RAVEL_INLINE double Book<Real>::shift_energy() {
-  s_.shifted.clear();
+  s_.shifted.clear();  // (finish_step's sweep marked them)
   for (int i = 0; i < model_.node_count; ++i)
-    if (const V3& dx = s_.corr[i].dx_contact; dx.x() != Real(0) || dx.y() != Real(0) || dx.z() != Real(0))
-      s_.shifted.push_back(i);
+    if (ctx_.shift_flag[i]) s_.shifted.push_back(i);
   if (s_.shifted.empty()) return 0;
   if (s_.elem_mark.empty()) s_.elem_mark.assign(model_.element_count, 0), s_.bend_mark.assign(model_.bend_k.size(), 0);
   if (++s_.mark == 0) {  // wrapped: clear the marks
@@ -121,6 +120,7 @@ template <class Real>
 void Book<Real>::finish_step() {
   double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0, w_compress = 0;
   const int n = model_.node_count;
+  ctx_.shift_flag.resize(n);
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     const double hm = 0.5 * model_.mass[i];
@@ -129,6 +129,7 @@ void Book<Real>::finish_step() {
     auto& c = s_.corr[i];
     w_contact += hm * double(c.dv_contact.dot(vsum));
     w_friction += hm * double(c.dv_friction.dot(vsum));
+    ctx_.shift_flag[i] = c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0);
     c.dv_contact.setZero();  // ready for the next step's corrections
     c.dv_friction.setZero();
     if (ctx_.compressible) {
@@ -157,7 +158,7 @@ void Book<Real>::finish_step() {
 }
 
 template <class Real>
-void finish_step(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx) {
+void finish_step(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx) {
   Book<Real>{model, s, run, ctx}.finish_step();
 }
 
@@ -166,7 +167,7 @@ template void close_ledger_row(const Model&, State<float>&, RunState&, double);
 template void close_ledger_row(const Model&, State<double>&, RunState&, double);
 template double fabric_ke(const Model&, const State<float>&);
 template double fabric_ke(const Model&, const State<double>&);
-template void finish_step(const Model&, State<float>&, RunState&, const Context<float>&);
-template void finish_step(const Model&, State<double>&, RunState&, const Context<double>&);
+template void finish_step(const Model&, State<float>&, RunState&, Context<float>&);
+template void finish_step(const Model&, State<double>&, RunState&, Context<double>&);
 
 }  // namespace ravel::detail

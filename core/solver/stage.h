@@ -41,6 +41,14 @@ namespace ravel::detail {
 // One crossing's corrections for one pass of the yarn contact, computed from the same state for
 // every crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
 // on the order crossings are visited in, nor on the number of threads.
+// The yarn contact's sums over one thread's share of the crossings at the end of a step (a
+// cache line each, so that the threads do not share one).
+struct alignas(64) ContactTally {
+  double fn = 0, comp_u = 0, stick_e = 0;  // normal force, compression energy, stick-spring energy
+  int sliding = 0, stuck = 0;              // loaded crossings that slide / stick
+  bool events = false;                     // some crossing has an event to book
+};
+
 template <class Real>
 struct CrossingImpulse {
   using V3 = Eigen::Matrix<Real, 3, 1>;
@@ -75,6 +83,9 @@ struct Context {
   std::vector<int> near;                    // projectile_contact: nodes in its bounding box
   std::vector<std::vector<int>> near_part;  // the same, per thread
   std::vector<int> rec_first, rec_last;     // yarn_contact: node bounds of the pass's records, running
+  std::vector<Real> moved;                  // yarn_contact: per crossing, the yarns' relative move this step
+  std::vector<ContactTally> tally;          // yarn_contact: the step's sums, per thread
+  std::vector<std::uint8_t> shift_flag;     // finish_step: per node, shifted this step (the ledger's shift work)
   std::vector<CrossingImpulse<Real>> impulses;
 
   explicit Context(const Model& m);
@@ -190,7 +201,7 @@ void residual_penetration(const Model& model, State<Real>& s, RunState& run, Con
 
 // ledger.cpp: kinetic energy of the half-step velocities and the work of this step's corrections.
 template <class Real>
-void finish_step(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx);
+void finish_step(const Model& model, State<Real>& s, RunState& run, Context<Real>& ctx);
 
 // faults.cpp: every kProjectileCheckEvery steps, a projectile gone non-finite or out of the domain.
 constexpr int kProjectileCheckEvery = 16;

@@ -126,6 +126,7 @@ struct YarnContact {
   // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums,
   // applied once per node by finish_pass; nodes the projectile holds take each correction
   // separately, as the hold projects out the part pushing into the projectile.
+  void moved_since_last(int c, ContactTally& tally);
   void gather(const CrossingImpulse& r, int lo, int hi);
 
   void finish_pass(int lo, int hi);
@@ -521,6 +522,8 @@ template <class Real>
 void YarnContact<Real>::run() {
   const int nc = int(model_.crossings.size());
   const int N = model_.contact_iterations;
+  ctx_.moved.resize(nc);
+  ctx_.tally.assign(std::max(1, ctx_.threads), ContactTally{});
   ctx_.impulses.resize(nc);  // (each crossing's fn_step, ft, event and comp_u are cleared by its first pass)
   for (int pass = 1; pass <= N; ++pass) {
     // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
@@ -567,30 +570,36 @@ void YarnContact<Real>::run() {
           int(std::lower_bound(ctx_.rec_first.begin(), ctx_.rec_first.end(), hi) - ctx_.rec_first.begin());
       for (int c = c_first; c < c_end; ++c) gather(ctx_.impulses[c], lo, hi);
       finish_pass(lo, hi);
+      if (last) {
+        // Once every node has its corrections, per crossing: how far the two yarns'
+        // material moved against each other this step, and the step's sums, each thread
+        // over its share of the crossings (a serial loop here was 5 % of a two-thread step,
+        // which the other thread spent waiting).
+#pragma omp barrier
+        int c_lo, c_hi;
+        my_share(nc, c_lo, c_hi, t);
+        for (int c = c_lo; c < c_hi; ++c) moved_since_last(c, ctx_.tally[t]);
+      }
     }
   }
-  // Book what broke the method's assumptions, in crossing order; sum the normal forces and
-  // count sliding and stuck crossings.
-  double fsum = 0, usum = 0, esum = 0;
-  int sliding = 0, stuck = 0;
+  // The sums of the thread shares in thread order; what broke the method's assumptions
+  // booked in crossing order.
+  ContactTally sum;
+  for (int t = 0; t < ctx_.threads; ++t) {
+    const ContactTally& p = ctx_.tally[t];
+    sum.fn += p.fn, sum.comp_u += p.comp_u, sum.stick_e += p.stick_e;
+    sum.sliding += p.sliding, sum.stuck += p.stuck, sum.events = sum.events || p.events;
+  }
+  run_.yarn_force = sum.fn;
+  s_.book.compress_end = sum.comp_u;
+  s_.book.stick_end = sum.stick_e;
+  run_.sliding_count = sum.sliding;
+  run_.stuck_count = sum.stuck;
+  if (!sum.events) return;
   for (int c = 0; c < nc; ++c) {
-    // How far the two yarns' material moved against each other this step: the offset of
-    // last step's tracked node pair, then and now (the pair may have been re-chosen since).
-    const LastPair was = s_.cr[c].last;
-    const Real moved = (pair_offset(model_, s_, c, was.kw, was.kf) - was.offset).norm();
-    s_.cr[c].last = {s_.cr[c].kw, s_.cr[c].kf, pair_offset(model_, s_, c, s_.cr[c].kw, s_.cr[c].kf)};
-    if (s_.cr[c].active) {
-      fsum += s_.cr[c].fn;
-      usum += s_.cr[c].comp_u;
-      esum += s_.cr[c].stick_e;
-      if (s_.cr[c].fn > 0) (s_.cr[c].sliding ? sliding : stuck)++;
-      // Material slip: the stick point's advance, but never faster than the yarns move
-      // against each other (a jump of the closest point along a kinked or re-paired
-      // yarn is not slip).
-      s_.cr[c].slip = std::min(s_.cr[c].slip, double(moved) / double(model_.dt));
-    }
     std::uint8_t ev = s_.cr[c].event;
     if (!ev) continue;
+    const Real moved = ctx_.moved[c];
     const Crossing& cr = model_.crossings[c];
     auto note = [&](long& count, double& t, int& i, int& j) {
       if (count++ == 0) t = run_.time, i = cr.grid_i, j = cr.grid_j;
@@ -612,11 +621,29 @@ void YarnContact<Real>::run() {
       note(run_.diag.passed_through, run_.diag.first_pass_time, run_.diag.first_pass_i, run_.diag.first_pass_j);
     if (ev & ev_separated) ++run_.diag.separated;
   }
-  run_.yarn_force = fsum;
-  s_.book.compress_end = usum;
-  s_.book.stick_end = esum;
-  run_.sliding_count = sliding;
-  run_.stuck_count = stuck;
+}
+
+// How far the two yarns' material moved against each other this step: the offset of last
+// step's tracked node pair, then and now (the pair may have been re-chosen since), kept in
+// the context for the step's event booking; the pair becomes next step's "last". An active
+// crossing's material slip is bounded by it: the stick point's advance, but never faster
+// than the yarns move against each other (a jump of the closest point along a kinked or
+// re-paired yarn is not slip).
+// The crossing's share of the step's sums goes to `tally`.
+template <class Real>
+RAVEL_INLINE void YarnContact<Real>::moved_since_last(int c, ContactTally& tally) {
+  CrossingState<Real>& x = s_.cr[c];
+  const LastPair was = x.last;
+  const Real moved = (pair_offset(model_, s_, c, was.kw, was.kf) - was.offset).norm();
+  x.last = {x.kw, x.kf, pair_offset(model_, s_, c, x.kw, x.kf)};
+  ctx_.moved[c] = moved;
+  if (x.event) tally.events = true;
+  if (!x.active) return;
+  x.slip = std::min(x.slip, double(moved) / double(model_.dt));
+  tally.fn += x.fn;
+  tally.comp_u += x.comp_u;
+  tally.stick_e += x.stick_e;
+  if (x.fn > 0) (x.sliding ? tally.sliding : tally.stuck)++;
 }
 
 template <class Real>
