@@ -1,16 +1,17 @@
 // The projectile's hold (solver.projectile_holds, docs/MODEL.md §4), in one place.
 //
 // The rule: a node the projectile pushed out this step rests on a rigid body, so the yarn
-// contact that follows does not move it back *into* the projectile. Four parts, each a
+// contact that follows does not move it back *into* the projectile. Five parts, each a
 // function here, used by the stages named:
 //
 //   hold_node             projectile_contact: the node is held, with the surface normal n
 //   held_mobility         yarn_contact (pass_normal): a held node yields to a crossing's
 //                         correction along u only in the directions free of the projectile
-//                         (1 - (u.n)^2 when the correction would push it in, else 1); if the
-//                         hold leaves a crossing less than kMinHeldMobility of its mobility
-//                         (both yarns pinned so that they could separate only into the
-//                         projectile), the crossing is corrected as if nothing were held
+//                         (1 - (u.n)^2 when the correction would push it in, else 1)
+//   crossing_keeps_hold   yarn_contact (pass_normal): if the hold leaves a crossing less than
+//                         kMinHeldMobility of its mobility (both yarns pinned so that they
+//                         could separate only into the projectile), the crossing is
+//                         corrected as if nothing were held
 //   pass_to_projectile    yarn_contact (gather): the part of an impulse on a held node that
 //   keep_out              pushes into the projectile is passed to it (its share of friction
 //                         and compression noted for their own work); a position shift keeps
@@ -25,7 +26,7 @@
 
 namespace ravel::detail {
 
-// The least share of a crossing's mobility the hold may leave (see held_mobility).
+// The least share of a crossing's mobility the hold may leave (see crossing_keeps_hold).
 constexpr double kMinHeldMobility = 0.25;
 
 template <class Real>
@@ -40,6 +41,16 @@ template <class Real>
 inline Real held_mobility(const State<Real>& s, int i, Real w, const Eigen::Matrix<Real, 3, 1>& u) {
   const Real un = u.dot(s.held_n[i]);
   return w * un < Real(0) ? Real(1) - un * un : Real(1);
+}
+
+// Whether a crossing honours the hold, given its inverse effective mass with the held nodes'
+// mobility (winv) and without (winv_free): not when the hold leaves it less than
+// kMinHeldMobility of its mobility (both yarns pinned so that they could separate only into
+// the projectile, which a rigid body cannot resolve); it is then corrected as if nothing
+// were held.
+template <class Real>
+inline bool crossing_keeps_hold(Real winv, Real winv_free) {
+  return winv >= Real(kMinHeldMobility) * winv_free;
 }
 
 // Take out of impulse P on held node i the part pushing into the projectile, and pass it on

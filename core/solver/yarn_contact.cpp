@@ -886,7 +886,7 @@ RAVEL_INLINE bool YarnContact<Real>::pass_normal(int c, Real alpha, bool last, c
     r.any_held = true;
     winv += wi * held_mobility(s_, i, r.w[k], u);  // (hold.h)
   }
-  r.hold = winv >= Real(kMinHeldMobility) * winv_free;
+  r.hold = crossing_keeps_hold(winv, winv_free);  // (hold.h)
   if (!r.hold) winv = winv_free;
   if (winv <= Real(0)) return false;  // every node clamped
   // Transverse compression (docs/MODEL.md §4): between the rest distance D and the
