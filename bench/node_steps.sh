@@ -57,9 +57,19 @@ mv "$tmp" "$out"
 trap - EXIT
 echo "wrote $out" >&2
 # Speed-up of 2 threads over 1 (best wall time of the repeats; and the CPU time ratio).
+# Also the median over the repeats of the paired ratio (the 1- and 2-thread runs of one
+# repeat follow each other, so a drift of the machine's speed between repeats cancels; on
+# a shared machine single runs spread by 10-30 % and the best of each column may come from
+# different moments).
 awk -F, '!/^#/ && $1 != "model" {
   k = $1 "," $2; w = $7 + 0; c = $8 + $9;
   if (!(k SUBSEP $3 in best) || w < best[k SUBSEP $3]) { best[k SUBSEP $3] = w; cpu[k SUBSEP $3] = c }
-  keys[k] = 1 }
-  END { for (k in keys) printf "  %-20s 1 thread %.2f s, 2 threads %.2f s: speed-up %.2fx (best wall); CPU time 2 vs 1 thread %.2fx\n",
-        k, best[k SUBSEP 1], best[k SUBSEP 2], best[k SUBSEP 1] / best[k SUBSEP 2], cpu[k SUBSEP 2] / cpu[k SUBSEP 1] }' "$out" >&2
+  wall[k SUBSEP $3 SUBSEP $4] = w; keys[k] = 1; if ($4 + 0 > nrep) nrep = $4 + 0 }
+  END { for (k in keys) {
+          n = 0
+          for (r = 1; r <= nrep; ++r)
+            if ((k SUBSEP 1 SUBSEP r) in wall && (k SUBSEP 2 SUBSEP r) in wall) q[++n] = wall[k SUBSEP 1 SUBSEP r] / wall[k SUBSEP 2 SUBSEP r]
+          for (i = 2; i <= n; ++i) for (j = i; j > 1 && q[j - 1] > q[j]; --j) { t = q[j]; q[j] = q[j - 1]; q[j - 1] = t }
+          med = n % 2 ? q[(n + 1) / 2] : (q[n / 2] + q[n / 2 + 1]) / 2
+          printf "  %-20s 1 thread %.2f s, 2 threads %.2f s: speed-up %.2fx (best wall), %.2fx (median of %d paired repeats); CPU time 2 vs 1 thread %.2fx\n",
+            k, best[k SUBSEP 1], best[k SUBSEP 2], best[k SUBSEP 1] / best[k SUBSEP 2], med, n, cpu[k SUBSEP 2] / cpu[k SUBSEP 1] } }' "$out" >&2
