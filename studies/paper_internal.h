@@ -99,6 +99,18 @@ struct LimitEntry {
   double frame_v = INFINITY;
 };
 
+// The paper's energy peak (Fig. 11, 13: absorbed energy rises with impact velocity "until
+// about 250 m/s before it decreases with further increase"): the first velocity whose
+// energy is a local maximum and falls by at least `min_fall` (relative) within the next
+// `window_mps`; then whether any later velocity reaches the peak's energy again. Indices
+// into the series; -1 where there is none.
+struct EnergyPeak {
+  int peak = -1, trough = -1;  // the peak, and the lowest point within the window after it
+  double fall = 0;             // (E_peak - E_trough) / E_peak
+  int regain = -1;             // the first later velocity at or above the peak's energy
+};
+EnergyPeak find_energy_peak(const Series& s, double min_fall = 0.15, double window_mps = 60);
+
 struct Claim {
   std::string figure, paper, ravel, verdict;  // verdict: agrees | partly | differs | not measured
 };

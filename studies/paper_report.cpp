@@ -247,9 +247,10 @@ void write_report(PaperState& ps) {
   for (const auto& c : ps.claims)
     md << "| " << c.figure << " | " << c.paper << " | " << (c.ravel.empty() ? "(no data)" : c.ravel) << " | **"
        << c.verdict << "** |\n";
-  md << "\nThresholds: drop = largest fall between neighbouring velocities, *agrees* if it lies between 220 and 280 "
-        "m/s "
-        "and is at least 15 %; mu = 0.2 highest at every velocity (*partly*: at least half); steep rise = mean slope "
+  md << "\nThresholds: peak = the first velocity whose energy (mu = 0.2, failure strain 5.2 %) is a local maximum and "
+        "falls by at least 15 % within the next 60 m/s; *agrees* if it lies between 220 and 280 m/s and no higher "
+        "velocity reaches its energy again (*partly*: one does, or the peak is elsewhere); mu = 0.2 highest at every "
+        "velocity (*partly*: at least half); steep rise = mean slope "
         "below mu = 0.06 more than 3x the mean fall above 0.2; perforation time within 15 us of 73 us and earlier than "
         "mu = 0.2; gentle = less than half the velocity lost at mu = 0.2; friction work within a factor 3 of 1 J; BL "
         "within 10 % of the paper; half = ratio 0.4-0.6; flat = within 10 %, lower = below by more than the tolerance; "
