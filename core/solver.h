@@ -7,11 +7,15 @@
 // file under core/solver/:
 //
 //   internal_forces       element strain -> Zener/elastic stress, bending springs, failure
-//                         (internal_forces.cpp): the forces of Eq 1 from x(t)
+//                         (internal_forces.cpp): the forces of Eq 1 from x(t); as it gathers
+//                         each node's force it makes that node's free update, v += dt/m f
+//                         (Eq 1), x += v dt (Eq 2) (stage.h: free_update): one sweep over
+//                         the nodes and one barrier less than a separate pass
 //   close_ledger_row      the ledger at t - dt/2 (ledger.cpp; needs this step's stored energy,
-//                         see below) and the energy-balance fault check (faults.cpp)
-//   integrate             v += dt/m sum(f) (Eq 1), x += v dt (Eq 2), projectile free flight
-//                         (integrate.cpp)
+//                         see below; reads no node) and the energy-balance fault check
+//                         (faults.cpp)
+//   integrate             the rest of Eq 1-2: external loads on nodes, the projectile's free
+//                         flight, the nodes' positions checked (integrate.cpp)
 //   projectile_contact    normal push-out (Eq 18-19) and friction (Eq 20-22)
 //                         (projectile_contact.cpp); before the yarn contact, so that the nodes
 //                         it pushed out rest on the projectile while the yarns are corrected

@@ -219,9 +219,10 @@ void InternalForces<Real>::run() {
       s_.bend_force[s] = d * Real(k);
     }
   }
-  // Gather.
+  // Gather, and with each node's force the free update of Eq 1-2 (stage.h: free_update).
   const int n = model_.node_count;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) if (ctx_.threads > 1)
+  double max_r2 = 0;
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(max : max_r2) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     V3 f = V3::Zero();
     for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k)
@@ -229,7 +230,9 @@ void InternalForces<Real>::run() {
     for (int k = ctx_.inc_b_off[i]; k < ctx_.inc_b_off[i + 1]; ++k)
       f += ctx_.inc_b[k].second * s_.bend_force[ctx_.inc_b[k].first];
     s_.f[i] = f;
+    max_r2 = std::max(max_r2, free_update(model_, s_, i, f));
   }
+  ctx_.max_r2 = max_r2;
   s_.book.stored_now = stored + bend_stored;
   s_.book.damping_cum += damp;
   s_.book.viscous_cum += diss;

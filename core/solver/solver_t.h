@@ -6,7 +6,8 @@
 //                           bending springs, nodal forces
 //   ledger.cpp              the energy book: the ledger row at t - dt/2, the kinetic energy
 //                           and the corrections' work at the end of the step
-//   integrate.cpp           Eq 1-2, the free update
+//   integrate.cpp           Eq 1-2, the free update (the nodes' part, free_update in stage.h,
+//                           runs inside internal_forces' force gather)
 //   projectile_contact.cpp  Eq 18-22
 //   hold.cpp, hold.h        the projectile's hold on the nodes it pushed out (the whole rule)
 //   yarn_contact.cpp        Eq 5-17: crossing tracking, closest points, normal correction with
@@ -52,9 +53,9 @@ class SolverT final : public Solver {
   void step() override {
     if (!run_.divergence.empty()) return;
     const Model& m = model_;
-    internal_forces(m, s_, run_, ctx_);                 // Eq 3, 23: element stress from strain; bending; failure
+    internal_forces(m, s_, run_, ctx_);                 // Eq 3, 23: element stress; bending; failure; Eq 1-2 per node
     close_ledger_row(m, s_, run_, max_balance_error_);  // ledger at t - dt/2
-    integrate(m, s_, run_, ctx_);                       // Eq 1-2
+    integrate(m, s_, run_, ctx_);                       // Eq 1-2: external loads, projectile, position check
     projectile_contact(m, s_, run_, ctx_);              // Eq 18-22
     if (!m.crossings.empty()) yarn_contact(m, s_, run_, ctx_);  // Eq 5-17
     release_held(m, s_, run_);                                  // the yarn contact's push on held nodes -> projectile

@@ -87,6 +87,7 @@ struct Context {
   std::vector<ContactTally> tally;          // yarn_contact: the step's sums, per thread
   std::vector<std::uint8_t> shift_flag;     // finish_step: per node, shifted this step (the ledger's shift work)
   std::vector<CrossingImpulse<Real>> impulses;
+  double max_r2 = 0;  // internal_forces' free update: the largest squared distance of a node from the centre
 
   explicit Context(const Model& m);
 };
@@ -177,7 +178,25 @@ void internal_forces(const Model& model, State<Real>& s, RunState& run, Context<
 template <class Real>
 void close_ledger_row(const Model& model, State<Real>& s, RunState& run, double max_balance_error);
 
-// integrate.cpp: Eq 1-2, the free update of the nodes and the projectile.
+// Eq 1-2 for node i: v(t+dt/2) = v(t-dt/2) + dt/m f; x(t+dt) = x(t) + dt v(t+dt/2), with f
+// the node's force. Fixed velocity components (clamps, symmetry planes) stay zero. Also keeps
+// v(t-dt/2) for the ledger and clears the step's contact shift. Returns |x|^2 (fault check).
+// Run by internal_forces as it gathers each node's force.
+template <class Real>
+RAVEL_INLINE double free_update(const Model& model, State<Real>& s, int i, const Eigen::Matrix<Real, 3, 1>& f) {
+  s.v_prev[i] = s.v[i];
+  s.corr[i].dx_contact.setZero();
+  const std::uint8_t fx = model.fixed[i];
+  if (fx == fix_all) return 0;
+  Eigen::Matrix<Real, 3, 1> v = s.v[i] + (Real(model.dt) * Real(model.inv_mass[i])) * f;
+  if (fx) zero_fixed(v, fx);
+  s.v[i] = v;
+  s.x[i] += Real(model.dt) * v;
+  return double(s.x[i].squaredNorm());
+}
+
+// integrate.cpp: Eq 1-2, the rest of the free update: external loads on nodes, the
+// projectile, and the nodes' positions checked.
 template <class Real>
 void integrate(const Model& model, State<Real>& s, RunState& run, const Context<Real>& ctx);
 
