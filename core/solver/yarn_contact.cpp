@@ -123,10 +123,12 @@ struct YarnContact {
   void run();
   void residual_penetration();
 
+  // After the last pass: the yarns' relative move at crossing c, its slip bound and its
+  // share of the step's sums (into tally).
+  void moved_since_last(int c, ContactTally& tally);
   // Gather one crossing's corrections of a pass for the nodes in [lo, hi): per node sums,
   // applied once per node by finish_pass; nodes the projectile holds take each correction
   // separately, as the hold projects out the part pushing into the projectile.
-  void moved_since_last(int c, ContactTally& tally);
   void gather(const CrossingImpulse& r, int lo, int hi);
 
   void finish_pass(int lo, int hi);
@@ -628,8 +630,7 @@ void YarnContact<Real>::run() {
 // the context for the step's event booking; the pair becomes next step's "last". An active
 // crossing's material slip is bounded by it: the stick point's advance, but never faster
 // than the yarns move against each other (a jump of the closest point along a kinked or
-// re-paired yarn is not slip).
-// The crossing's share of the step's sums goes to `tally`.
+// re-paired yarn is not slip). The crossing's share of the step's sums goes to `tally`.
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::moved_since_last(int c, ContactTally& tally) {
   CrossingState<Real>& x = s_.cr[c];
