@@ -38,9 +38,6 @@
 
 namespace ravel::detail {
 
-// One crossing's corrections for one pass of the yarn contact, computed from the same state for
-// every crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
-// on the order crossings are visited in, nor on the number of threads.
 // The yarn contact's sums over one thread's share of the crossings at the end of a step (a
 // cache line each, so that the threads do not share one).
 struct alignas(64) ContactTally {
@@ -49,6 +46,9 @@ struct alignas(64) ContactTally {
   bool events = false;                     // some crossing has an event to book
 };
 
+// One crossing's corrections for one pass of the yarn contact, computed from the same state for
+// every crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
+// on the order crossings are visited in, nor on the number of threads.
 template <class Real>
 struct CrossingImpulse {
   using V3 = Eigen::Matrix<Real, 3, 1>;
