@@ -80,12 +80,13 @@ struct Context {
   double crimp_damping_k = 0;  // the same for yarn.crimp_damping
 
   // --- Per-step scratch: what a stage needs within a step and forgets.
-  std::vector<int> near;                    // projectile_contact: nodes in its bounding box
-  std::vector<std::vector<int>> near_part;  // the same, per thread
-  std::vector<int> rec_first, rec_last;     // yarn_contact: node bounds of the pass's records, running
-  std::vector<Real> moved;                  // yarn_contact: per crossing, the yarns' relative move this step
-  std::vector<ContactTally> tally;          // yarn_contact: the step's sums, per thread
-  std::vector<std::uint8_t> shift_flag;     // finish_step: per node, shifted this step (the ledger's shift work)
+  std::vector<int> near;                     // projectile_contact: nodes in its bounding box
+  std::vector<std::vector<int>> near_part;   // the same, per thread
+  std::vector<int> rec_first, rec_last;      // yarn_contact: node bounds of the pass's records, running
+  std::vector<int> chunk_first, chunk_last;  // the same bounds at the ends of each thread's crossings
+  std::vector<Real> moved;                   // yarn_contact: per crossing, the yarns' relative move this step
+  std::vector<ContactTally> tally;           // yarn_contact: the step's sums, per thread
+  std::vector<std::uint8_t> shift_flag;      // finish_step: per node, shifted this step (the ledger's shift work)
   std::vector<CrossingImpulse<Real>> impulses;
   double max_r2 = 0;  // internal_forces' free update: the largest squared distance of a node from the centre
 
