@@ -84,6 +84,8 @@ struct Context {
   std::vector<std::vector<int>> near_part;   // the same, per thread
   std::vector<int> rec_first, rec_last;      // yarn_contact: node bounds of the pass's records, running
   std::vector<int> chunk_first, chunk_last;  // the same bounds at the ends of each thread's crossings
+  std::vector<int> batch_bound;              // yarn_contact: the crossing batches thread t takes, [t, t + 1)
+  std::vector<double> batch_busy;            // and the seconds each thread spent on them this step
   std::vector<Real> moved;                   // yarn_contact: per crossing, the yarns' relative move this step
   std::vector<ContactTally> tally;           // yarn_contact: the step's sums, per thread
   std::vector<std::uint8_t> shift_flag;      // finish_step: per node, shifted this step (the ledger's shift work)
@@ -120,6 +122,26 @@ inline void my_share(int n, int& lo, int& hi, int& t) {
 #endif
   lo = int(long(n) * t / T);
   hi = int(long(n) * (t + 1) / T);
+}
+
+// Inside a parallel region: this thread's number t and the team's size.
+inline void my_team(int& t, int& team) {
+#ifdef _OPENMP
+  t = omp_get_thread_num();
+  team = omp_get_num_threads();
+#else
+  t = 0;
+  team = 1;
+#endif
+}
+
+// Wall-clock seconds (for load balancing only: never part of a result).
+inline double wall_seconds() {
+#ifdef _OPENMP
+  return omp_get_wtime();
+#else
+  return 0;
+#endif
 }
 
 // The pin-jointed crimp stage (Model::crimp_strain): apparent strain e (against the node

@@ -122,6 +122,8 @@ struct YarnContact {
 
   void run();
   void residual_penetration();
+  // The next step's split of the nb crossing batches among the threads (Context::batch_bound).
+  void rebalance_batches(int nb);
 
   // After the last pass: the yarns' relative move at crossing c, its slip bound and its
   // share of the step's sums (into tally).
@@ -520,6 +522,34 @@ RAVEL_INLINE void YarnContact<Real>::closest_batch(int c0, int c1, const bool* o
   }
 }
 
+// Each thread's share of the batches in proportion to its speed in this step (batches per
+// second), moved a fifth of the way from the present split, so that one step in which the
+// host took a thread's core does not swing it. The cost moves over the fabric during a run
+// (the impact region is dearer early, the far field later), so no fixed split balances it.
+// Measured on the default scene to 102 us at two threads, the difference of the two
+// threads' batch times summed over the steps (what the earlier one waits at the barrier):
+// even split 0.07-0.20 s (mean 0.14, 7 runs), this 0.03-0.10 s (mean 0.07, 4 runs) in runs
+// of about 2 s; moving half-way, 0.04-0.21 s (mean 0.09, 7 runs).
+template <class Real>
+void YarnContact<Real>::rebalance_batches(int nb) {
+  const int T = int(ctx_.batch_busy.size());
+  if (nb < T) return;
+  double speed_sum = 0;
+  for (int k = 0; k < T; ++k) {
+    const int n = ctx_.batch_bound[k + 1] - ctx_.batch_bound[k];
+    if (n <= 0 || !(ctx_.batch_busy[k] > 0)) return;  // no measure: keep the split
+    speed_sum += n / ctx_.batch_busy[k];
+  }
+  double end = 0;
+  for (int k = 0; k + 1 < T; ++k) {
+    const int n = ctx_.batch_bound[k + 1] - ctx_.batch_bound[k];
+    const double fair = nb * (n / ctx_.batch_busy[k]) / speed_sum;
+    end += n + 0.2 * (fair - n);
+    // At least one batch for every thread on either side of the bound.
+    ctx_.batch_bound[k + 1] = std::clamp(int(std::lround(end)), ctx_.batch_bound[k] + 1, nb - (T - 1 - k));
+  }
+}
+
 template <class Real>
 void YarnContact<Real>::run() {
   const int nc = int(model_.crossings.size());
@@ -529,6 +559,12 @@ void YarnContact<Real>::run() {
   ctx_.chunk_first.assign(std::max(1, ctx_.threads), 0);
   ctx_.chunk_last.assign(std::max(1, ctx_.threads), 0);
   ctx_.impulses.resize(nc);  // (each crossing's fn_step, ft, event and comp_u are cleared by its first pass)
+  const int T = std::max(1, ctx_.threads), nb = (nc + kBatch - 1) / kBatch;
+  if (int(ctx_.batch_bound.size()) != T + 1 || ctx_.batch_bound.back() != nb) {
+    ctx_.batch_bound.resize(T + 1);
+    for (int k = 0; k <= T; ++k) ctx_.batch_bound[k] = int(long(nb) * k / T);
+  }
+  ctx_.batch_busy.assign(T, 0.0);
   for (int pass = 1; pass <= N; ++pass) {
     // alpha_n = 1/sqrt(N - n + 1): the last pass applies the full remainder (SPEC §4).
     const Real alpha = Real(1.0 / std::sqrt(double(N - pass + 1)));
@@ -538,14 +574,21 @@ void YarnContact<Real>::run() {
     // fall in its range: race-free, and the same sums whatever the number of threads.
     // One thread runs the same code (gathering each batch as it was done instead saved 2 %
     // of a one-thread step, not worth a second path).
-    const int nb = (nc + kBatch - 1) / kBatch;
     ctx_.rec_first.resize(nc);
     ctx_.rec_last.resize(nc);
 #pragma omp parallel num_threads(ctx_.threads)
     {
-      int b0, b1, t;
-      my_share(nb, b0, b1, t);
+      // Each thread takes a contiguous run of batches, split by their cost in the last step
+      // (rebalance_batches): the one-crossing code for held nodes, symmetry planes and yarn
+      // ends makes some runs dearer. The split does not change a result.
+      int t, team, b0, b1;
+      my_team(t, team);
+      if (team == T)
+        b0 = ctx_.batch_bound[t], b1 = ctx_.batch_bound[t + 1];
+      else
+        my_share(nb, b0, b1, t);
       const int cb0 = std::min(nc, b0 * kBatch), cb1 = std::min(nc, b1 * kBatch);
+      const double start = T > 1 ? wall_seconds() : 0;
       for (int b = b0; b < b1; ++b) {
         const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
         crossing_batch(c0, c1, alpha, first, last, &ctx_.impulses[c0]);
@@ -570,6 +613,7 @@ void YarnContact<Real>::run() {
       // Each thread runs them over its own crossings, then takes in the other threads'
       // ends (two serial sweeps over all crossings here took about 2 % of the main thread's
       // time in a two-thread step, the other thread waiting).
+      if (T > 1 && team == T) ctx_.batch_busy[t] += wall_seconds() - start;
       int* rl = ctx_.rec_last.data();
       int* rf = ctx_.rec_first.data();
       for (int c = cb0 + 1; c < cb1; ++c) rl[c] = std::max(rl[c], rl[c - 1]);
@@ -579,7 +623,7 @@ void YarnContact<Real>::run() {
 #pragma omp barrier
       int before = -1, after = std::numeric_limits<int>::max();
       for (int u = 0; u < t; ++u) before = std::max(before, ctx_.chunk_last[u]);
-      for (int u = t + 1; u < int(ctx_.chunk_first.size()); ++u) after = std::min(after, ctx_.chunk_first[u]);
+      for (int u = t + 1; u < team; ++u) after = std::min(after, ctx_.chunk_first[u]);
       // (the running bounds are monotone, so only a leading / trailing run of them changes)
       for (int c = cb0; c < cb1 && rl[c] < before; ++c) rl[c] = before;
       for (int c = cb1 - 1; c >= cb0 && rf[c] > after; --c) rf[c] = after;
@@ -603,6 +647,7 @@ void YarnContact<Real>::run() {
       }
     }
   }
+  if (T > 1) rebalance_batches(nb);
   // The sums of the thread shares in thread order; what broke the method's assumptions
   // booked in crossing order.
   ContactTally sum;
