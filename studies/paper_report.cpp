@@ -254,7 +254,9 @@ void write_report(PaperState& ps) {
         "below mu = 0.06 more than 3x the mean fall above 0.2; perforation time within 15 us of 73 us and earlier than "
         "mu = 0.2; gentle = less than half the velocity lost at mu = 0.2; friction work within a factor 3 of 1 J; BL "
         "within 10 % of the paper; half = ratio 0.4-0.6; flat = within 10 %, lower = below by more than the tolerance; "
-        "slit = broken warp yarns at most a third of broken weft yarns; square = warp/weft ratio 0.7-1.4.\n\n";
+        "slit = broken warp yarns at most a third of broken weft yarns; square = warp/weft ratio 0.7-1.4.\n\n"
+     << "Where a verdict is *partly* or *differs*, docs/MODEL.md §9 says why, with the runs that isolate the "
+        "mechanism.\n\n";
 
   md << "## Charts\n\nEach chart is a PNG (shown), an SVG and the CSV of exactly the plotted numbers.\n\n";
   for (const auto& [caption, stem] : ps.charts)
