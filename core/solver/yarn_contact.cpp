@@ -606,6 +606,7 @@ void YarnContact<Real>::run() {
           ctx_.rec_last[c] = z;
         }
       }
+      if (T > 1 && team == T) ctx_.batch_busy[t] += wall_seconds() - start;
       // Running maximum of the highest node and running minimum (from the end) of the
       // lowest: a node range [lo, hi) is touched only by records between the first
       // crossing whose running maximum reaches lo and the last whose running minimum is
@@ -613,7 +614,6 @@ void YarnContact<Real>::run() {
       // Each thread runs them over its own crossings, then takes in the other threads'
       // ends (two serial sweeps over all crossings here took about 2 % of the main thread's
       // time in a two-thread step, the other thread waiting).
-      if (T > 1 && team == T) ctx_.batch_busy[t] += wall_seconds() - start;
       int* rl = ctx_.rec_last.data();
       int* rf = ctx_.rec_first.data();
       for (int c = cb0 + 1; c < cb1; ++c) rl[c] = std::max(rl[c], rl[c - 1]);
