@@ -110,20 +110,6 @@ inline void zero_fixed(V3& v, std::uint8_t fx) {
   if (fx & fix_z) v.z() = 0;
 }
 
-// Inside a parallel region: this thread's share [lo, hi) of n items (contiguous, in thread
-// order) and its number t.
-inline void my_share(int n, int& lo, int& hi, int& t) {
-#ifdef _OPENMP
-  t = omp_get_thread_num();
-  const int T = omp_get_num_threads();
-#else
-  t = 0;
-  const int T = 1;
-#endif
-  lo = int(long(n) * t / T);
-  hi = int(long(n) * (t + 1) / T);
-}
-
 // Inside a parallel region: this thread's number t and the team's size.
 inline void my_team(int& t, int& team) {
 #ifdef _OPENMP
@@ -133,6 +119,15 @@ inline void my_team(int& t, int& team) {
   t = 0;
   team = 1;
 #endif
+}
+
+// Inside a parallel region: this thread's share [lo, hi) of n items (contiguous, in thread
+// order) and its number t.
+inline void my_share(int n, int& lo, int& hi, int& t) {
+  int T;
+  my_team(t, T);
+  lo = int(long(n) * t / T);
+  hi = int(long(n) * (t + 1) / T);
 }
 
 // Wall-clock seconds (for load balancing only: never part of a result).
