@@ -2,14 +2,20 @@
 # ravel against LAMMPS on the same fabric, one core each, in one run (issue 21's speed peer).
 #
 # LAMMPS (Debian's `lammps`, installed here if missing) runs the default scene's quarter
-# fabric as a bare spring network: 72 x 72 crossings, two nodes per crossing (warp and weft
-# yarn, L1 apart), harmonic bonds of the yarns' instantaneous stiffness K1 A / L along each
-# yarn, the clamped edge fixed, the symmetry planes held, the 12 mm sphere driven through
-# it at 260 m/s as a moving repulsive region, velocity Verlet at ravel's time step. No
-# friction, crossing contact, bending, viscoelasticity, failure or energy ledger: a floor
-# for what an explicit network of this size costs per step, not the same physics. ravel
-# runs the real default scene to the same simulated time (102 us, 1672 steps) on one
-# thread. Both are timed as whole processes and by their own loop timers.
+# fabric as a spring network: 72 x 72 crossings, two nodes per crossing (warp and weft
+# yarn, L1 apart), springs of the yarns' instantaneous stiffness K1 A / L along each yarn,
+# the clamped edge fixed, the symmetry planes held, the 12 mm sphere driven through it at
+# 260 m/s as a moving repulsive region, velocity Verlet at ravel's time step. Two networks:
+#   lammps_spring_network     the issue's peer: tension-only springs (no force when shorter
+#                             than their rest length, a tabulated law) that break for good
+#                             at the yarn's 5.2 % failure strain (fix bond/break, checked
+#                             every step as ravel checks its elements)
+#   lammps_harmonic_network   harmonic springs that push as well as pull and never break:
+#                             the cheapest network LAMMPS runs, a floor
+# No friction, crossing contact, bending, viscoelasticity or energy ledger in either: what
+# an explicit network of this size costs per step, not the same physics. ravel runs the
+# real default scene to the same simulated time (102 us, 1672 steps) on one thread. All
+# are timed as whole processes and by their own loop timers.
 #
 # usage: bench/lammps_compare.sh [BUILD_DIR]        prints CSV on stdout
 set -euo pipefail
@@ -57,18 +63,33 @@ with open(work + "/fabric.data", "w") as f:
         f.write("%d 1 %d %d\n" % (k + 1, a, b))
 Lel = math.sqrt(L0 ** 2 + L1 ** 2)
 k = E * A / Lel                         # N/m; LAMMPS harmonic: E = K (r - r0)^2, K = k / 2
+eps_f = 0.052                           # failure strain (the default scene's)
+r_fail = Lel * (1 + eps_f)
 with open(work + "/params.in", "w") as f:
     f.write("variable K equal %.9g\nvariable r0 equal %.9g\nvariable xclamp equal %.9g\n" % (k / 2, Lel, h * L0 - 1e-9))
+    f.write("variable rfail equal %.12g\n" % r_fail)
+# The tension-only law as a LAMMPS bond table: force k (r - r0) between r0 and r_fail, none
+# below r0; r0 and r_fail fall on grid points (spacing r0 / 1000), so linear interpolation
+# is exact. fix bond/break deletes a bond once it is longer than r_fail, before the next
+# force evaluation, so the table need not reach further than a few points past it.
+dr, n_fail = Lel / 1000, int(round(1000 * (1 + eps_f)))
+with open(work + "/tension.table", "w") as f:
+    f.write("# tension-only spring, k = %.6g N/m, r0 = %.6g m\n\nTENSION\nN %d\n\n" % (k, Lel, n_fail + 10))
+    for i in range(1, n_fail + 11):
+        r = i * dr
+        taut = 1000 < i <= n_fail
+        f.write("%d %.12g %.12g %.12g\n" % (i, r, 0.5 * k * (r - Lel) ** 2 if taut else 0.0, -k * (r - Lel) if taut else 0.0))
+print(n_fail + 10, file=open(work + "/table_points", "w"))
 print(len(atoms), file=open(work + "/nodes", "w"))
 EOF
-cat >"$work/in.fabric" <<'EOF'
+# The two networks differ only in their bond law (BOND_LAW below).
+cat >"$work/in.template" <<'EOF'
 units si
 atom_style bond
 boundary f f f
 read_data fabric.data
 include params.in
-bond_style harmonic
-bond_coeff 1 ${K} ${r0}
+BOND_LAW
 pair_style none
 variable xc atom x>${xclamp}
 group clamp variable xc
@@ -89,27 +110,40 @@ thermo 0
 thermo_style custom step f_push[3]
 run 1672
 EOF
+points=$(cat "$work/table_points")
+sed "s|BOND_LAW|bond_style table linear $points\nbond_coeff 1 tension.table TENSION\nfix break all bond/break 1 1 \${rfail}|" \
+  "$work/in.template" >"$work/in.tension"
+sed 's|BOND_LAW|bond_style harmonic\nbond_coeff 1 ${K} ${r0}|' "$work/in.template" >"$work/in.harmonic"
 nodes=$(cat "$work/nodes")
 steps=1672
 now() { date +%s.%N; }
+loop_time() { sed -n 's/^Loop time of \([0-9.e+-]*\) on .*/\1/p' "$1" | tail -1; }
 t0=$(now)
-(cd "$work" && lmp -in in.fabric -log lammps.log -screen none)
+(cd "$work" && lmp -in in.tension -log tension.log -screen none)
 t1=$(now)
-lammps_loop=$(sed -n 's/^Loop time of \([0-9.e+-]*\) on .*/\1/p' "$work/lammps.log" | tail -1)
+h0=$(now)
+(cd "$work" && lmp -in in.harmonic -log harmonic.log -screen none)
+h1=$(now)
+lammps_loop=$(loop_time "$work/tension.log")
+harmonic_loop=$(loop_time "$work/harmonic.log")
 t2=$(now)
 "$ravel" run --set solver.end_time_us=102 --threads 1 --out "$work/ravel" --quiet >/dev/null
 t3=$(now)
 ravel_loop=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['wall_time_s'])")
 ravel_nodes=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['modelled_node_count'])")
 ravel_steps=$(python3 -c "import json; print(json.load(open('$work/ravel/summary.json'))['step_count'])")
-python3 - "$nodes" "$steps" "$t0" "$t1" "$lammps_loop" "$ravel_nodes" "$ravel_steps" "$t2" "$t3" "$ravel_loop" <<'EOF'
+python3 - "$nodes" "$steps" "$t0" "$t1" "$lammps_loop" "$h0" "$h1" "$harmonic_loop" \
+  "$ravel_nodes" "$ravel_steps" "$t2" "$t3" "$ravel_loop" <<'EOF'
 import sys
-n, s, t0, t1, ll, rn, rs, t2, t3, rl = sys.argv[1:]
+n, s, t0, t1, ll, h0, h1, hl, rn, rs, t2, t3, rl = sys.argv[1:]
 n, s, rn, rs = int(n), int(s), int(rn), int(rs)
-lw, rw = float(t1) - float(t0), float(t3) - float(t2)
-ll, rl = float(ll), float(rl)
+lw, hw, rw = float(t1) - float(t0), float(h1) - float(h0), float(t3) - float(t2)
+ll, hl, rl = float(ll), float(hl), float(rl)
+per = lambda loop, nodes, steps: loop / (nodes * steps)
 print("code,nodes,steps,process_wall_s,loop_s,ns_per_node_step")
-print("lammps_spring_network,%d,%d,%.3f,%.3f,%.1f" % (n, s, lw, ll, ll / (n * s) * 1e9))
-print("ravel_default_scene,%d,%d,%.3f,%.3f,%.1f" % (rn, rs, rw, rl, rl / (rn * rs) * 1e9))
-print("ratio_ravel_over_lammps,,,%.2f,%.2f,%.2f" % (rw / lw, rl / ll, (rl / (rn * rs)) / (ll / (n * s))))
+print("lammps_spring_network,%d,%d,%.3f,%.3f,%.1f" % (n, s, lw, ll, per(ll, n, s) * 1e9))
+print("lammps_harmonic_network,%d,%d,%.3f,%.3f,%.1f" % (n, s, hw, hl, per(hl, n, s) * 1e9))
+print("ravel_default_scene,%d,%d,%.3f,%.3f,%.1f" % (rn, rs, rw, rl, per(rl, rn, rs) * 1e9))
+print("ratio_ravel_over_lammps,,,%.2f,%.2f,%.2f" % (rw / lw, rl / ll, per(rl, rn, rs) / per(ll, n, s)))
+print("ratio_ravel_over_lammps_harmonic,,,%.2f,%.2f,%.2f" % (rw / hw, rl / hl, per(rl, rn, rs) / per(hl, n, s)))
 EOF
