@@ -25,6 +25,11 @@ struct Frame {
   std::vector<std::array<float, 3>> node_pos;  // m
   std::vector<std::array<float, 3>> node_vel;  // m/s
   std::vector<float> node_slip_rate;           // m/s, sliding speed at the node's crossing (0 when stuck / pin-jointed)
+  // J/g: the yarn-yarn friction's heat so far (Solver::crossing_friction_heat), each
+  // crossing's half at each yarn's node where the contact is now, per gram of the two nodes
+  // (the same on a symmetry plane, where heat and mass are both halved). About 1.42 J/g per
+  // kelvin for aramid.
+  std::vector<float> node_friction_j_per_g;
 
   // Yarn elements: straight two-node segments.
   std::vector<std::uint32_t> elem_a, elem_b;  // node indices

@@ -631,6 +631,7 @@ Frame Simulation::frame() const {
   f.node_pos.resize(m.node_count);
   f.node_vel.resize(m.node_count);
   f.node_slip_rate.assign(m.node_count, 0.f);
+  f.node_friction_j_per_g.assign(m.node_count, 0.f);
   for (int i = 0; i < m.node_count; ++i) {
     const Vec3d x = S.position(i), v = S.velocity(i);
     f.node_pos[i] = {float(x.x()), float(x.y()), float(x.z())};
@@ -657,6 +658,13 @@ Frame Simulation::frame() const {
     f.crossing_normal_force_n[c] = float(S.crossing_normal_force(ci));
     f.crossing_slip_rate[c] = r;
     f.crossing_active[c] = S.crossing_active(ci) ? 1 : 0;
+    // The crossing's friction heat, half to each yarn's node where the contact is now, per
+    // gram of the two nodes (on a symmetry plane heat and mass are both halved).
+    if (const double q = S.crossing_friction_heat(ci); q > 0) {
+      const double g = (m.mass[a] + m.mass[b]) * 1e3;
+      f.node_friction_j_per_g[a] += float(q / g);
+      f.node_friction_j_per_g[b] += float(q / g);
+    }
     if (r <= 0) continue;
     f.node_slip_rate[a] = std::max(f.node_slip_rate[a], r);
     f.node_slip_rate[b] = std::max(f.node_slip_rate[b], r);

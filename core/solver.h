@@ -162,8 +162,13 @@ class Solver {
   virtual double crossing_normal_force(int c) const = 0;    // N (Eq 11), last step
   virtual double crossing_friction_force(int c) const = 0;  // N, magnitude of the resultant, last step
   virtual double crossing_slip_rate(int c) const = 0;       // m/s
-  virtual double crossing_gap(int c) const = 0;             // |d| - D after the step (m), <0: penetration
-  virtual int crossing_warp_node(int c) const = 0;          // tracked nearest node along the warp yarn
+  // The friction's Coulomb dissipation at crossing c so far: the sum over steps of its
+  // friction force times its slip speed times dt (J, this modelled crossing; 0 at mu = 0
+  // and while it sticks). Where friction heats the yarns; its sum over the crossings runs
+  // somewhat above the ledger's friction_work_J (docs/MODEL.md §8).
+  virtual double crossing_friction_heat(int c) const = 0;
+  virtual double crossing_gap(int c) const = 0;     // |d| - D after the step (m), <0: penetration
+  virtual int crossing_warp_node(int c) const = 0;  // tracked nearest node along the warp yarn
   virtual int crossing_weft_node(int c) const = 0;
 
   // Per step scalars.

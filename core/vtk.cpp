@@ -93,7 +93,7 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
   // are marked `duplicate` = 1, so a sum over the cells or points with duplicate = 0 counts
   // the whole fabric once.
   constexpr float kOnPlane = 1e-7f;  // m: nodes on a symmetry plane stay on it
-  std::vector<float> points, velocity, slip;
+  std::vector<float> points, velocity, slip, friction;
   std::vector<std::uint8_t> point_dup;
   points.reserve(np * nc * 3);
   velocity.reserve(np * nc * 3);
@@ -104,6 +104,7 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       const auto v = i < f.node_vel.size() ? f.node_vel[i] : std::array<float, 3>{0, 0, 0};
       velocity.insert(velocity.end(), {v[0] * m[0], v[1] * m[1], v[2]});
       slip.push_back(i < f.node_slip_rate.size() ? f.node_slip_rate[i] : 0.0f);
+      friction.push_back(i < f.node_friction_j_per_g.size() ? f.node_friction_j_per_g[i] : 0.0f);
       point_dup.push_back((m[0] < 0 && std::abs(p[0]) < kOnPlane) || (m[1] < 0 && std::abs(p[1]) < kOnPlane));
     }
   const bool have_grid = !f.yarn_grid.empty() && f.yarn_grid.size() == f.yarn_family.size();
@@ -175,6 +176,7 @@ bool write_vtu(const Frame& f, const std::string& path, bool mirror, std::string
       << "      <PointData Vectors=\"velocity\" Scalars=\"slip_rate\">\n";
   array(xml, app, "velocity", velocity, 3);
   array(xml, app, "slip_rate", slip);
+  array(xml, app, "friction_heat_J_per_g", friction);
   array(xml, app, "duplicate", point_dup);
   xml << "      </PointData>\n      <CellData Scalars=\"strain_ratio\">\n";
   array(xml, app, "strain", strain);

@@ -83,12 +83,14 @@ const char* to_string(ColorField f) {
       return "velocity";
     case ColorField::sliding:
       return "sliding";
+    case ColorField::friction:
+      return "friction";
   }
   return "?";
 }
 
 bool parse_color_field(const std::string& name, ColorField* out) {
-  for (ColorField f : {ColorField::strain, ColorField::velocity, ColorField::sliding})
+  for (ColorField f : {ColorField::strain, ColorField::velocity, ColorField::sliding, ColorField::friction})
     if (name == to_string(f)) {
       *out = f;
       return true;
@@ -104,6 +106,8 @@ const char* field_title(ColorField f) {
       return "yarn speed (m/s)";
     case ColorField::sliding:
       return "sliding speed (m/s)";
+    case ColorField::friction:
+      return "friction heat (J/g)";
   }
   return "";
 }

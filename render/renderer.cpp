@@ -220,6 +220,9 @@ static float element_value(const Frame& f, ColorField field, std::size_t e) {
     case ColorField::sliding:
       if (a >= f.node_slip_rate.size() || b >= f.node_slip_rate.size()) return 0.0f;
       return 0.5f * (std::abs(f.node_slip_rate[a]) + std::abs(f.node_slip_rate[b]));
+    case ColorField::friction:
+      if (a >= f.node_friction_j_per_g.size() || b >= f.node_friction_j_per_g.size()) return 0.0f;
+      return 0.5f * (f.node_friction_j_per_g[a] + f.node_friction_j_per_g[b]);
   }
   return 0.0f;
 }
@@ -242,6 +245,23 @@ void field_range(const Frame& frame, const ViewOptions& options, float* lo, floa
       float m = 0;
       for (float s : frame.node_slip_rate) m = std::max(m, std::abs(s));
       *hi = nice_ceil(std::max(m, 1e-3f));
+      break;
+    }
+    case ColorField::friction: {
+      // The top of the scale at the 98th percentile of the nodes' values: friction gathers
+      // at a few crossings under the projectile, and the rest of the ply would be one colour
+      // under the largest (values above it take the top colour).
+      std::vector<float> v;
+      v.reserve(frame.node_friction_j_per_g.size());
+      for (float x : frame.node_friction_j_per_g)
+        if (x > 0) v.push_back(x);
+      float top = 0;
+      if (!v.empty()) {
+        const std::size_t k = std::min(v.size() - 1, std::size_t(0.98 * double(v.size())));
+        std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
+        top = v[k];
+      }
+      *hi = nice_ceil(std::max(top, 1e-3f));
       break;
     }
   }

@@ -30,7 +30,7 @@ bool load_gl(GlProcLoader loader, std::string* error = nullptr);
 
 // ---------------------------------------------------------------------------------------
 // Fields and colour maps.
-enum class ColorField { strain, velocity, sliding };
+enum class ColorField { strain, velocity, sliding, friction };
 const char* to_string(ColorField f);
 bool parse_color_field(const std::string& name, ColorField* out);
 // Colour-bar title with units, e.g. "strain / failure strain", "speed (m/s)".

@@ -145,7 +145,7 @@ int cmd_run(const Args& args) {
     if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &rec.view.view))
       throw UsageError("--view: expected oblique, top, back or section");
     if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &rec.view.field))
-      throw UsageError("--field: expected strain, velocity or sliding");
+      throw UsageError("--field: expected strain, velocity, sliding or friction");
     rec.png = rec.mode != render::RecorderOptions::Mode::none;
     rec.vtk = has_switch(a, "vtk");
     rec.dir = a.out_dir;

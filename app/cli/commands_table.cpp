@@ -30,7 +30,7 @@ std::vector<Command> make_table() {
         kThreads,
         {"size", "WxH", false, "window size (default: 1600x1000, or 90 % of a smaller screen; at least 640x480)"},
         {"view", "NAME", false, "initial camera: oblique (default), top, back or section"},
-        {"field", "NAME", false, "initial colour field: strain (default), velocity or sliding"},
+        {"field", "NAME", false, "initial colour field: strain (default), velocity, sliding or friction"},
         {"paused", nullptr, false, "open paused at t = 0"},
         {"pause-at-us", "T", false, "pause when the simulated time reaches T us"},
         {"frames", "N", false, "quit after N UI frames (for scripts and tests)"},
@@ -53,7 +53,7 @@ std::vector<Command> make_table() {
                  "PNG frames into DIR/frames/ every N steps, the last one only, or none (default)"},
                 {"vtk", nullptr, false, "a VTU series DIR/vtk/frame.pvd at the --frames times (default every=100)"},
                 {"view", "NAME", false, "camera of the PNG frames: oblique (default), top, back or section"},
-                {"field", "NAME", false, "colour of the PNG frames: strain (default), velocity or sliding"},
+                {"field", "NAME", false, "colour of the PNG frames: strain (default), velocity, sliding or friction"},
                 {"resume", nullptr, false,
                  "continue from DIR/checkpoint.bin (a killed or interrupted run of the same scene and build) "
                  "instead of t = 0"},
@@ -69,7 +69,7 @@ std::vector<Command> make_table() {
                 kThreads,
                 {"at", "T_US[,T_US...]", false, "simulated times in us (required)"},
                 {"view", "NAME", false, "oblique (default), top, back or section"},
-                {"field", "NAME", false, "strain (default), velocity or sliding"},
+                {"field", "NAME", false, "strain (default), velocity, sliding or friction"},
                 {"range", "LO:HI", false, "a fixed colour range (default: the field's own)"},
                 {"size", "WxH", false, "image size (default 1600x1200)"},
                 kQuiet}});

@@ -381,8 +381,8 @@ void view_section(GuiApp& app) {
   } else {
     ImGui::TextUnformatted("colour");
     ImGui::SameLine();
-    const char* fields[] = {"strain", "speed", "sliding"};
-    radio_row(fields, 3, &o.field);
+    const char* fields[] = {"strain", "speed", "sliding", "friction"};
+    radio_row(fields, 4, &o.field);
   }
   // Colour map and range: the range follows the field (strain: 0-1 of the failure strain,
   // speed: 0 to the impact velocity, sliding: 0 to the frame's maximum) unless locked.

@@ -12,9 +12,10 @@ std::size_t vbytes(const std::vector<T>& v) {
 }  // namespace
 
 std::size_t Timeline::Kept::bytes() const {
-  return sizeof(Kept) + vbytes(node_pos) + vbytes(node_vel) + vbytes(node_slip_rate) + vbytes(elem_strain) +
-         vbytes(elem_stress_pa) + vbytes(elem_broken) + vbytes(crossing_warp_node) + vbytes(crossing_weft_node) +
-         vbytes(crossing_normal_force_n) + vbytes(crossing_slip_rate) + vbytes(crossing_active);
+  return sizeof(Kept) + vbytes(node_pos) + vbytes(node_vel) + vbytes(node_slip_rate) + vbytes(node_friction_j_per_g) +
+         vbytes(elem_strain) + vbytes(elem_stress_pa) + vbytes(elem_broken) + vbytes(crossing_warp_node) +
+         vbytes(crossing_weft_node) + vbytes(crossing_normal_force_n) + vbytes(crossing_slip_rate) +
+         vbytes(crossing_active);
 }
 
 Timeline::Kept Timeline::keep(const Frame& f, long step) {
@@ -26,6 +27,7 @@ Timeline::Kept Timeline::keep(const Frame& f, long step) {
   k.node_pos = f.node_pos;
   k.node_vel = f.node_vel;
   k.node_slip_rate = f.node_slip_rate;
+  k.node_friction_j_per_g = f.node_friction_j_per_g;
   k.elem_strain = f.elem_strain;
   k.elem_stress_pa = f.elem_stress_pa;
   k.elem_broken = f.elem_broken;
@@ -54,8 +56,8 @@ void Timeline::add(const Frame& f, long step) {
   if (kept_.empty()) {
     skeleton_ = f;  // the parts that do not change; the per-frame arrays are dropped below
     for (auto* v : {&skeleton_.node_pos, &skeleton_.node_vel}) v->clear(), v->shrink_to_fit();
-    for (auto* v : {&skeleton_.node_slip_rate, &skeleton_.elem_strain, &skeleton_.elem_stress_pa,
-                    &skeleton_.crossing_normal_force_n, &skeleton_.crossing_slip_rate})
+    for (auto* v : {&skeleton_.node_slip_rate, &skeleton_.node_friction_j_per_g, &skeleton_.elem_strain,
+                    &skeleton_.elem_stress_pa, &skeleton_.crossing_normal_force_n, &skeleton_.crossing_slip_rate})
       v->clear(), v->shrink_to_fit();
     skeleton_.elem_broken.clear();
     skeleton_.crossing_active.clear();
@@ -115,6 +117,7 @@ Frame Timeline::frame(std::size_t i) const {
   f.node_pos = k.node_pos;
   f.node_vel = k.node_vel;
   f.node_slip_rate = k.node_slip_rate;
+  f.node_friction_j_per_g = k.node_friction_j_per_g;
   f.elem_strain = k.elem_strain;
   f.elem_stress_pa = k.elem_stress_pa;
   f.elem_broken = k.elem_broken;

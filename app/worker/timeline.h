@@ -71,7 +71,7 @@ class Timeline {
     bool perforated = false;
     std::array<float, 3> projectile_pos{0, 0, 0};
     std::vector<std::array<float, 3>> node_pos, node_vel;
-    std::vector<float> node_slip_rate, elem_strain, elem_stress_pa;
+    std::vector<float> node_slip_rate, node_friction_j_per_g, elem_strain, elem_stress_pa;
     std::vector<std::uint8_t> elem_broken;
     std::vector<std::uint32_t> crossing_warp_node, crossing_weft_node;
     std::vector<float> crossing_normal_force_n, crossing_slip_rate;

@@ -118,6 +118,9 @@ class SolverT final : public Solver {
   double crossing_friction_force(int c) const override {
     return s_.cr[c].ft;
   }
+  double crossing_friction_heat(int c) const override {
+    return s_.cr[c].heat;
+  }
   double crossing_slip_rate(int c) const override {
     return s_.cr[c].slip;
   }

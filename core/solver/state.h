@@ -49,6 +49,9 @@ struct CrossingState {
   double stick_w = -1, stick_f = -1;
   double fn = 0, ft = 0, slip = 0, gap = 0, fn_step = 0;
   double comp_u = 0, stick_e = 0;
+  // The friction's Coulomb dissipation at this crossing so far, the sum of |f_t| v_slip dt
+  // (J, this modelled crossing): where friction heats the yarns (Solver::crossing_friction_heat).
+  double heat = 0;
   LastPair<Real> last;
   std::uint8_t active = 1, sliding = 0, event = 0;
 };

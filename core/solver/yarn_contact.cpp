@@ -705,6 +705,7 @@ RAVEL_INLINE void YarnContact<Real>::moved_since_last(int c, ContactTally& tally
   if (x.event) tally.events = true;
   if (!x.active) return;
   x.slip = std::min(x.slip, double(moved) / double(model_.dt));
+  x.heat += x.ft * x.slip * model_.dt;
   tally.fn += x.fn;
   tally.comp_u += x.comp_u;
   tally.stick_e += x.stick_e;

@@ -186,6 +186,33 @@ TEST(RenderColor, VelocityFieldUsesImpactVelocityRangeWithUnits) {
   EXPECT_LT(hi, 2.6f * max_slip);
 }
 
+// The friction field: per element the mean of its nodes' friction heat; the scale's top at
+// the 98th percentile of the nodes with any (a few hot crossings must not make the rest one
+// colour), rounded up to a nice number; values above it take the top colour.
+TEST(RenderColor, FrictionFieldTopsAtTheNinetyEighthPercentile) {
+  SyntheticFabric s;
+  Frame f = make_synthetic_frame(s);
+  f.node_friction_j_per_g.assign(f.node_pos.size(), 0.0f);
+  const std::size_t n = std::min<std::size_t>(1000, f.node_pos.size());
+  ASSERT_EQ(n, 1000u);
+  for (std::size_t i = 0; i < n; ++i) f.node_friction_j_per_g[i] = float(i + 1) * 0.1f;  // 0.1 .. 100 J/g
+  f.node_friction_j_per_g[0] = 1e4f;                                                     // one hot node: above the top
+  ViewOptions o;
+  render::ColorField parsed;
+  ASSERT_TRUE(render::parse_color_field("friction", &parsed));
+  o.field = parsed;
+  EXPECT_STREQ(render::to_string(o.field), "friction");
+  EXPECT_STREQ(render::field_title(o.field), "friction heat (J/g)");
+  float lo, hi;
+  render::field_range(f, o, &lo, &hi);
+  EXPECT_EQ(lo, 0.0f);
+  EXPECT_EQ(hi, 100.0f);  // the 980th of 1000 values is 98.1 J/g; nice_ceil(98.1) = 100
+  f.node_friction_j_per_g.assign(f.node_pos.size(), 0.0f);  // nothing yet: a small positive top
+  render::field_range(f, o, &lo, &hi);
+  EXPECT_GT(hi, 0.0f);
+  EXPECT_LE(hi, 1e-3f);
+}
+
 TEST(RenderColor, WarpAndWeftAreDistinguishable) {
   SyntheticFabric s;
   s.projectile_z_m = 0.05f;

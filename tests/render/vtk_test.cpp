@@ -50,11 +50,11 @@ TEST(Vtk, SeriesWritesVtuPerFrameAndAPvdIndex) {
   // Quarter model mirrored to the full fabric: 4 copies of points and cells.
   EXPECT_NE(vtu.find("NumberOfPoints=\"" + std::to_string(4 * f.node_pos.size()) + "\""), std::string::npos);
   EXPECT_NE(vtu.find("NumberOfCells=\"" + std::to_string(4 * f.elem_a.size()) + "\""), std::string::npos);
-  for (const char* name : {"strain", "stress", "velocity", "broken", "yarn_id"})
+  for (const char* name : {"strain", "stress", "velocity", "friction_heat_J_per_g", "broken", "yarn_id"})
     EXPECT_NE(vtu.find(std::string("Name=\"") + name + "\""), std::string::npos) << name;
   // Appended raw data: each array = 8-byte length + payload. Points: 4 * nodes * 3 floats.
   const std::size_t np = 4 * f.node_pos.size(), nc = 4 * f.elem_a.size();
-  const std::size_t payload = (np * 3 * 4 + 8) * 2 + (np * 4 + 8)            // points, velocity, slip
+  const std::size_t payload = (np * 3 * 4 + 8) * 2 + 2 * (np * 4 + 8)        // points, velocity, slip, friction
                               + (np + 8)                                     // point duplicate
                               + 3 * (nc * 4 + 8)                             // strain, ratio, stress
                               + 4 * (nc + 8) + (nc * 4 + 8)                  // broken, family, copy, duplicate, yarn
