@@ -267,6 +267,17 @@ void field_range(const Frame& frame, const ViewOptions& options, float* lo, floa
   }
 }
 
+void share_field_range(const std::vector<const Frame*>& frames, ViewOptions* o) {
+  if (o->range_max > o->range_min || (o->field != ColorField::sliding && o->field != ColorField::friction)) return;
+  float hi = 0;
+  for (const Frame* f : frames) {
+    float lo_i = 0, hi_i = 0;
+    field_range(*f, *o, &lo_i, &hi_i);
+    hi = std::max(hi, hi_i);
+  }
+  if (hi > 0) o->range_min = 0, o->range_max = hi;
+}
+
 std::vector<std::string> caption_lines(const Frame& frame, const ViewOptions& options) {
   // Short lines: the caption sits in the margin beside the fabric, not over it.
   char buf[128];

@@ -173,6 +173,10 @@ struct DrawStats {
 
 // The colour range a field uses for a frame under `options`.
 void field_range(const Frame& frame, const ViewOptions& options, float* lo, float* hi);
+// Several frames drawn side by side with one colour bar (demos, compare): a field scaled
+// from the data (sliding, friction) gets one range for all, the largest of their own; the
+// other fields, and a range already set, are left as they are.
+void share_field_range(const std::vector<const Frame*>& frames, ViewOptions* o);
 // The caption text the renderer prints (one line per entry).
 std::vector<std::string> caption_lines(const Frame& frame, const ViewOptions& options);
 

@@ -183,12 +183,16 @@ std::vector<std::uint8_t> compose_key_frame(render::HeadlessRenderer& hr, render
   // The whole image: the background gradient only (it clears the rectangle first).
   render::ViewOptions bg;
   bg.show_fabric = bg.show_projectile = bg.show_clamps = bg.show_caption = bg.show_colorbar = false;
+  bg.show_scale_bar = bg.show_axes = false;  // (they belong to the viewports, not under the banner)
   bg.background_top = {0.13f, 0.15f, 0.19f};
   bg.background_bottom = {0.06f, 0.07f, 0.09f};
   if (!runs.empty())
     hr.renderer().draw(runs[0].frame, L.viewports.empty() ? render::Camera{} : L.viewports[0].camera, bg, 0, 0, L.width,
                        L.height);
-  const render::ViewOptions o = demo_view_options(demo, L);
+  render::ViewOptions o = demo_view_options(demo, L);
+  std::vector<const Frame*> frames;
+  for (const RunState& r : runs) frames.push_back(&r.frame);
+  render::share_field_range(frames, &o);  // one colour bar for every run
   for (std::size_t i = 0; i < runs.size() && i < L.viewports.size(); ++i) {
     const ViewportLayout& v = L.viewports[i];
     const int gl_y = L.height - v.y - v.h;
@@ -200,9 +204,12 @@ std::vector<std::uint8_t> compose_key_frame(render::HeadlessRenderer& hr, render
       const Scene s = demo_scene(demo, i);
       lines = wave_front_lines(s, runs[i].frame, runs[i].frame.time_s);
     }
+    // The run's name bottom right, above the scale bar's row (bottom left when the wave
+    // fronts' legend takes that corner).
+    const bool legend = demo.overlay == Overlay::wave_fronts;
     render::TextBlock title;
-    title.x = 10;
-    title.y = -10;
+    title.x = legend ? 10 : -10;
+    title.y = legend ? -10 : -(10 + 32 * o.ui_scale);
     title.lines = {runs[i].label};
     title.colors = {render::Vec3{1.0f, 0.75f, 0.35f}};
     title.scale = render::Annotator::default_scale(L.height) + 1;

@@ -51,7 +51,7 @@ enum class Overlay { none, wave_fronts };
 enum class DemoChart { velocity_history, broken_yarns };
 
 struct Demo {
-  std::string name;                    // command-line name: waves, friction, slit, limit
+  std::string name;                    // command-line name: waves, friction, slit, limit, heat
   std::string title;                   // menu entry
   std::string summary;                 // one sentence for --list and the menu tooltip
   std::string scene = "twaron_ct716";  // shipped scene name or TOML path

@@ -206,7 +206,7 @@ void CompareMode::update() {
   for (std::size_t i = 0; i < workers_.size(); ++i) {
     if (times[i] == HUGE_VAL) continue;
     if (views_[i].frame.time_s < t - 0.5 * views_[i].summary.dt_s) {
-      workers_[i]->pause_at(t);
+      workers_[i]->pause_at(t, /*hold=*/true);  // (the view may lag the run: never let it play past t)
       if (workers_[i]->paused()) workers_[i]->play();
     }
   }
@@ -357,6 +357,9 @@ void CompareMode::render_view(GuiApp&, render::Renderer& renderer, int w, int h,
       glViewport(0, 0, w, h);
       glClearColor(0.08f, 0.09f, 0.12f, 1);
       glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      std::vector<const Frame*> frames;
+      for (int i = 0; i < n; ++i) frames.push_back(&shown(std::size_t(i)));
+      render::share_field_range(frames, &o);  // one colour bar for every pane
       for (int i = 0; i < n; ++i) {
         const int cx = i % cols, ry = i / cols;
         const int vx = cx * w / cols, vw = (cx + 1) * w / cols - vx - (cols > 1 ? 3 : 0);

@@ -130,10 +130,11 @@ void SimWorker::set_threads(int threads) {
   notify();
 }
 
-void SimWorker::pause_at(double t_s) {
+void SimWorker::pause_at(double t_s, bool hold) {
   {
     std::lock_guard<std::mutex> lk(mutex_);
     pending_.pause_at_s = t_s;
+    pending_.pause_hold = hold;
     has_pending_.store(true);
   }
   notify();
@@ -290,7 +291,7 @@ bool SimWorker::apply_commands() {
     }
     if (p.pause_at_s) {
       pause_at_s_ = *p.pause_at_s;
-      pause_at_fired_ = pause_at_s_ >= 0 && sim_->time_s() + 0.5 * sim_->dt_s() >= pause_at_s_;
+      pause_at_fired_ = !p.pause_hold && pause_at_s_ >= 0 && sim_->time_s() + 0.5 * sim_->dt_s() >= pause_at_s_;
     }
     if (p.max_past_runs) max_past_runs_ = *p.max_past_runs;
     if (p.clear_past) {

@@ -103,8 +103,10 @@ class SimWorker {
   void set_pacing(const Pacing& pacing);
   void set_threads(int threads);  // solver threads, applied live
   // Pause every run when its simulated time reaches t_s (< 0: never). Play continues
-  // past it; a reset or restart stops there again.
-  void pause_at(double t_s);
+  // past it; a reset or restart stops there again. With `hold` (the side-by-side runs of a
+  // comparison, which ask again each frame from a view that may lag the run) a run already
+  // at or past t_s pauses after its next step instead of playing on past it.
+  void pause_at(double t_s, bool hold = false);
   void clear_past_runs();
   void set_max_past_runs(int n);  // default 6
   // Queue every published frame for the UI (WorkerView::new_frames), at most 64 between two
@@ -140,6 +142,7 @@ class SimWorker {
     std::optional<Pacing> pacing;
     std::optional<int> threads;
     std::optional<double> pause_at_s;
+    bool pause_hold = false;
     std::optional<int> max_past_runs;
     bool clear_past = false;
   };

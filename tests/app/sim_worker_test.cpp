@@ -207,6 +207,30 @@ TEST(SimWorker, PauseAtStopsAtThatTime) {
   EXPECT_NEAR(v.frame.time_s, 1.0e-6, v.summary.dt_s);
 }
 
+// A comparison asks each run again every UI frame to hold at the shared clock's time, from
+// a view that may lag the run. Asked again for a time it has already reached, a held run
+// pauses after one more step; without `hold` it would play on past it (the single run's
+// "pause at" is passed once, then Play goes on), which let a demo's run escape its key frame.
+TEST(SimWorker, HoldAtATimeAlreadyReachedPausesAgain) {
+  SimWorker w(small_scene(), true);
+  w.pause_at(1.0e-6, /*hold=*/true);
+  w.play();
+  ASSERT_TRUE(w.wait_for_steps(1000000, 20s));
+  ASSERT_TRUE(w.wait_idle(10s));
+  WorkerView v;
+  w.sync(v);
+  ASSERT_EQ(v.state, WorkerState::paused);
+  const long at = v.step_count;
+  w.pause_at(1.0e-6, /*hold=*/true);  // the same time again, then Play, as a lagging view does
+  w.play();
+  ASSERT_TRUE(w.wait_for_steps(1000000, 20s));
+  ASSERT_TRUE(w.wait_idle(10s));
+  w.sync(v);
+  EXPECT_EQ(v.state, WorkerState::paused);
+  EXPECT_LE(v.step_count, at + 1);
+  EXPECT_NEAR(v.frame.time_s, 1.0e-6, 1.5 * v.summary.dt_s);
+}
+
 TEST(SimWorker, DivergencePausesWithAMessage) {
   // alpha = 2.5 is far beyond the explicit scheme's stable limit (SPEC §3).
   SimWorker w(small_scene({"solver.dt_factor=2.5", "yarn.material=elastic"}), false);

@@ -80,7 +80,7 @@ const Rendered& rendered(const std::string& name) {
   return cache.emplace(name, std::move(r)).first->second;
 }
 
-TEST(DemoCatalogue, HasTheFourDemosWithKeyFramesAndCaptions) {
+TEST(DemoCatalogue, HasTheFiveDemosWithKeyFramesAndCaptions) {
   for (bool quick : {false, true}) {
     std::set<std::string> names;
     for (const Demo& d : catalogue(quick)) {
@@ -100,7 +100,7 @@ TEST(DemoCatalogue, HasTheFourDemosWithKeyFramesAndCaptions) {
       }
       for (std::size_t i = 0; i < d.runs.size(); ++i) EXPECT_NO_THROW(demo_scene(d, i)) << d.name;
     }
-    EXPECT_EQ(names, (std::set<std::string>{"waves", "friction", "slit", "limit"}));
+    EXPECT_EQ(names, (std::set<std::string>{"waves", "friction", "slit", "limit", "heat"}));
   }
 }
 
@@ -211,7 +211,7 @@ TEST_P(DemoRender, ReachesItsKeyFramesWithImagesThatAreNotBlankAndDiffer) {
   EXPECT_TRUE(fs::exists(r.result.index_path));
 }
 
-INSTANTIATE_TEST_SUITE_P(Quick, DemoRender, ::testing::Values("waves", "friction", "slit", "limit"));
+INSTANTIATE_TEST_SUITE_P(Quick, DemoRender, ::testing::Values("waves", "friction", "slit", "limit", "heat"));
 
 // Where a line of colour `want` crosses the image row through the strike point, scanning
 // right from `from_px`: the middle of the first run of matching pixels (-1 if none).

@@ -213,6 +213,28 @@ TEST(RenderColor, FrictionFieldTopsAtTheNinetyEighthPercentile) {
   EXPECT_LE(hi, 1e-3f);
 }
 
+// Side by side (demos, compare) a data-scaled field gets one range, the largest of the
+// frames' own; strain keeps its fixed range, and a range already set stays.
+TEST(RenderColor, SideBySideFramesShareTheDataScaledRange) {
+  SyntheticFabric s;
+  Frame cool = make_synthetic_frame(s), hot = cool;
+  cool.node_friction_j_per_g.assign(cool.node_pos.size(), 2.0f);
+  hot.node_friction_j_per_g.assign(hot.node_pos.size(), 40.0f);
+  ViewOptions o;
+  o.field = render::ColorField::friction;
+  render::share_field_range({&cool, &hot}, &o);
+  EXPECT_EQ(o.range_min, 0.0f);
+  EXPECT_EQ(o.range_max, 50.0f);  // nice_ceil(40): the hotter frame's own top
+  ViewOptions set;
+  set.field = render::ColorField::friction;
+  set.range_min = 0, set.range_max = 7;
+  render::share_field_range({&cool, &hot}, &set);
+  EXPECT_EQ(set.range_max, 7.0f);
+  ViewOptions strain;
+  render::share_field_range({&cool, &hot}, &strain);
+  EXPECT_EQ(strain.range_max, strain.range_min);  // left to field_range (0 .. 1)
+}
+
 TEST(RenderColor, WarpAndWeftAreDistinguishable) {
   SyntheticFabric s;
   s.projectile_z_m = 0.05f;
