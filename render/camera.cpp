@@ -1,6 +1,8 @@
 // Orbit camera, presets and fit-to-fabric.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <string>
 
 #include "render/math.h"
 #include "render/renderer.h"
@@ -21,13 +23,25 @@ const char* to_string(ViewPreset v) {
   return "?";
 }
 
+namespace {
+constexpr ViewPreset kViewPresets[] = {ViewPreset::oblique, ViewPreset::top, ViewPreset::back, ViewPreset::section};
+}  // namespace
+
 bool parse_view_preset(const std::string& name, ViewPreset* out) {
-  for (ViewPreset v : {ViewPreset::oblique, ViewPreset::top, ViewPreset::back, ViewPreset::section})
+  for (ViewPreset v : kViewPresets)
     if (name == to_string(v)) {
       *out = v;
       return true;
     }
   return false;
+}
+
+std::string view_preset_names() {
+  std::string s;
+  const std::size_t n = std::size(kViewPresets);
+  for (std::size_t i = 0; i < n; ++i)
+    s += (i == 0 ? "" : i + 1 == n ? " or " : ", ") + std::string(to_string(kViewPresets[i]));
+  return s;
 }
 
 Camera Camera::preset(ViewPreset v) {

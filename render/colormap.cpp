@@ -5,6 +5,8 @@
 // lightness only, for figures that will be printed in black and white.
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <string>
 
 #include "render/renderer.h"
 
@@ -89,13 +91,26 @@ const char* to_string(ColorField f) {
   return "?";
 }
 
+namespace {
+constexpr ColorField kColorFields[] = {ColorField::strain, ColorField::velocity, ColorField::sliding,
+                                       ColorField::friction};
+}  // namespace
+
 bool parse_color_field(const std::string& name, ColorField* out) {
-  for (ColorField f : {ColorField::strain, ColorField::velocity, ColorField::sliding, ColorField::friction})
+  for (ColorField f : kColorFields)
     if (name == to_string(f)) {
       *out = f;
       return true;
     }
   return false;
+}
+
+std::string color_field_names() {
+  std::string s;
+  const std::size_t n = std::size(kColorFields);
+  for (std::size_t i = 0; i < n; ++i)
+    s += (i == 0 ? "" : i + 1 == n ? " or " : ", ") + std::string(to_string(kColorFields[i]));
+  return s;
 }
 
 const char* field_title(ColorField f) {

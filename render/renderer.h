@@ -33,6 +33,8 @@ bool load_gl(GlProcLoader loader, std::string* error = nullptr);
 enum class ColorField { strain, velocity, sliding, friction };
 const char* to_string(ColorField f);
 bool parse_color_field(const std::string& name, ColorField* out);
+// The names parse_color_field accepts, for messages: "strain, velocity, sliding or friction".
+std::string color_field_names();
 // Colour-bar title with units, e.g. "strain / failure strain", "speed (m/s)".
 const char* field_title(ColorField f);
 
@@ -49,6 +51,8 @@ Vec3 colormap(ColorMap map, float t);
 enum class ViewPreset { oblique, top, back, section };
 const char* to_string(ViewPreset v);
 bool parse_view_preset(const std::string& name, ViewPreset* out);
+// The names parse_view_preset accepts, for messages: "oblique, top, back or section".
+std::string view_preset_names();
 
 class Camera {
  public:

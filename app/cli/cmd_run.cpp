@@ -143,9 +143,9 @@ int cmd_run(const Args& args) {
     if (a.flags.count("frames") && !render::parse_frames_spec(a.flags["frames"], &rec, &rec_error))
       throw UsageError(rec_error);
     if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &rec.view.view))
-      throw UsageError("--view: expected oblique, top, back or section");
+      throw UsageError("--view: expected " + render::view_preset_names());
     if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &rec.view.field))
-      throw UsageError("--field: expected strain, velocity, sliding or friction");
+      throw UsageError("--field: expected " + render::color_field_names());
     rec.png = rec.mode != render::RecorderOptions::Mode::none;
     rec.vtk = has_switch(a, "vtk");
     rec.dir = a.out_dir;

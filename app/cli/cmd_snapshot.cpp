@@ -55,9 +55,9 @@ int cmd_snapshot(const Args& args) {
 
     render::ViewOptions view;
     if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &view.view))
-      throw UsageError("--view: expected oblique, top, back or section, got '" + a.flags["view"] + "'");
+      throw UsageError("--view: expected " + render::view_preset_names() + ", got '" + a.flags["view"] + "'");
     if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &view.field))
-      throw UsageError("--field: expected strain, velocity, sliding or friction, got '" + a.flags["field"] + "'");
+      throw UsageError("--field: expected " + render::color_field_names() + ", got '" + a.flags["field"] + "'");
     if (a.flags.count("range")) {
       char colon = 0;
       if (std::sscanf(a.flags["range"].c_str(), "%f%c%f", &view.range_min, &colon, &view.range_max) != 3 ||

@@ -473,9 +473,9 @@ int cmd_gui(const Args& args) {
     }
     render::ViewOptions view_options;
     if (a.flags.count("view") && !render::parse_view_preset(a.flags["view"], &view_options.view))
-      throw UsageError("--view: expected oblique, top, back or section, got '" + a.flags["view"] + "'");
+      throw UsageError("--view: expected " + render::view_preset_names() + ", got '" + a.flags["view"] + "'");
     if (a.flags.count("field") && !render::parse_color_field(a.flags["field"], &view_options.field))
-      throw UsageError("--field: expected strain, velocity, sliding or friction, got '" + a.flags["field"] + "'");
+      throw UsageError("--field: expected " + render::color_field_names() + ", got '" + a.flags["field"] + "'");
     int win_w = 1600, win_h = 1000;
     if (a.flags.count("size")) {
       char x = 0, rest = 0;
