@@ -296,8 +296,11 @@ Model build_model(const Scene& scene) {
         if (m.compression == CrossingCompression::hyperbolic) {
           c.flattened_distance = std::min(f.flattened_gap_m * k, c.contact_distance);
           c.compression_force = f.compression_force_n * double(k) * double(k) * plane_factor(c.grid_i, c.grid_j);
+          c.packed_distance = std::clamp(f.packed_gap_m * k, c.flattened_distance, c.contact_distance);
+          c.flattening_force = f.flattening_force_n * double(k) * double(k) * plane_factor(c.grid_i, c.grid_j);
         } else {
           c.flattened_distance = c.contact_distance;
+          c.packed_distance = c.contact_distance;
         }
         m.crossings.push_back(c);
       }

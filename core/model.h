@@ -39,6 +39,10 @@ struct Crossing {
   // symmetry plane it lies on).
   double flattened_distance = 0.0;
   double compression_force = 0.0;
+  // The two-stage law's packed distance c_pack (c_min <= c_pack <= c0; = c_min: one stage) and
+  // the flattening stage's force F_flat (scaled like compression_force).
+  double packed_distance = 0.0;
+  double flattening_force = 0.0;
 };
 
 struct Model {

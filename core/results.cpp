@@ -186,6 +186,15 @@ std::string summary_json(const Summary& s, const Scene& scene) {
                                                                     : nlohmann::ordered_json(nullptr);
   j["energy_balance_error"] = s.energy_balance_error;
   j["friction_work_J"] = outcome(s.friction_work_J);
+  j["friction_work_to_first_break_J"] = outcome(s.friction_work_to_first_break_J);
+  j["friction_work_to_perforation_J"] = outcome(s.friction_work_to_perforation_J);
+  j["first_break_distance_mm"] = s.first_break_distance_m >= 0 && !undefined
+                                    ? nlohmann::ordered_json(s.first_break_distance_m * 1e3)
+                                    : nlohmann::ordered_json(nullptr);
+  j["broken_before_perforation_elements"] = s.broken_before_perforation;
+  j["broken_near_clamp_elements"] = s.broken_near_clamp;
+  j["first_break_time_s"] = s.first_break_time_s >= 0 && !undefined ? nlohmann::ordered_json(s.first_break_time_s)
+                                                                    : nlohmann::ordered_json(nullptr);
   j["yarn_friction"] = scene.yarn.friction;
   j["failure_strain"] = scene.yarn.failure_strain;
   j["model"] = s.model;

@@ -223,6 +223,13 @@ std::vector<KeyDef> make_defs() {
   NUM("fabric.compression_force_n", "N",
       "F_half: normal force per crossing that closes half of the compressible distance D - c_min", 1, 0, true, inf,
       fabric.compression_force_n);
+  NUM("fabric.packed_gap_mm", "mm",
+      "c_pack: centre distance of two crossing yarns whose fibres are packed (end of the packing stage, "
+      "before the fibres themselves flatten); below D; at or below c_min the law has one stage", 1e-3, 0, true, inf,
+      fabric.packed_gap_m);
+  NUM("fabric.flattening_force_n", "N",
+      "F_flat: normal force per crossing that closes half of the flattening stage c_pack - c_min", 1, 0, true, inf,
+      fabric.flattening_force_n);
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
   text_key(
@@ -415,6 +422,8 @@ const std::vector<UnitSlip>& unit_slips() {
       {"fabric.thickness_mm", 0.01, 20, {{"m", 1e3}, {"um", 1e-3}}},
       {"fabric.flattened_gap_mm", 0.005, 5, {{"m", 1e3}, {"um", 1e-3}}},
       {"fabric.compression_force_n", 1e-3, 1e4, {{"kN", 1e3}, {"mN", 1e-3}}},
+      {"fabric.packed_gap_mm", 0.005, 5, {{"m", 1e3}, {"um", 1e-3}}},
+      {"fabric.flattening_force_n", 1e-3, 1e5, {{"kN", 1e3}, {"mN", 1e-3}}},
       {"projectile.diameter_mm", 0.5, 300, {{"m", 1e3}, {"cm", 10}}},
       {"projectile.length_mm", 0.5, 1000, {{"m", 1e3}, {"cm", 10}}},
       {"projectile.mass_g", 0.05, 1e5, {{"kg", 1e3}, {"mg", 1e-3}}},
@@ -785,6 +794,11 @@ void validate_scene(Scene& s) {
     fail("fabric.flattened_gap_mm", "the flattened centre distance (" + fmt3(f.flattened_gap_m * 1e3) +
                                         " mm) must be below the rest distance D = fabric.thickness_mm / 2 = " +
                                         fmt3(0.5 * f.thickness_m * 1e3) + " mm");
+  if (f.crossing_compression == CrossingCompression::hyperbolic &&
+      f.packed_gap_m >= 0.5 * f.thickness_m)
+    fail("fabric.packed_gap_mm", "the packed centre distance (" + fmt3(f.packed_gap_m * 1e3) +
+                                     " mm) must be below the rest distance D = fabric.thickness_mm / 2 = " +
+                                     fmt3(0.5 * f.thickness_m * 1e3) + " mm");
   // The projectile against the fabric as a whole (after the fabric itself): a clearer message than "does not
   // fit at the strike point" when no strike point could work.
   const double fabric_min = f.weave == Weave::plain ? std::min(f.width_m, f.length_m) : f.length_m;

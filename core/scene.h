@@ -45,7 +45,13 @@ struct FabricParams {
   // (1 + f / F_half), c0 the rest distance, f the crossing's normal force.
   CrossingCompression crossing_compression = CrossingCompression::hyperbolic;
   double flattened_gap_m = 0.10e-3;  // c_min: centre distance of two fully flattened yarns
-  double compression_force_n = 0.5;  // F_half: normal force that closes half of c0 - c_min
+  double compression_force_n = 0.5;  // F_half: normal force that closes half of c0 - c_pack (packing stage)
+  // Two stages (docs/MODEL.md §4): the fibres of a yarn first pack (void closure, c0 -> c_pack,
+  // at the force scale F_half), then the packed fibres themselves flatten (c_pack -> c_min, at
+  // the force scale F_flat): c = c_min + (c_pack - c_min) / (1 + f / F_flat) + (c0 - c_pack) /
+  // (1 + f / F_half). c_pack = c_min is the one-stage law.
+  double packed_gap_m = 0.10e-3;      // c_pack: centre distance once the fibres are packed
+  double flattening_force_n = 50;     // F_flat: force per crossing that closes half of c_pack - c_min
 };
 
 struct YarnParams {

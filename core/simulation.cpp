@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 
 #include "model.h"
 #include "solver.h"
@@ -69,6 +70,9 @@ constexpr double kMinSearchLost = 4;
 // the yarns by 64 us; excursions of a few hundredths of a J (0.01-0.02 %) were seen at other
 // settings.
 constexpr double kNegativeFrictionShare = 5e-4;
+// "Near a clamp" for the failure-site counts of the summary (issue 37's acceptance: at most a
+// quarter of the elements broken before perforation within 2 mm of a clamp).
+constexpr double kNearClamp_m = 2e-3;
 
 std::string fmt(const char* f, double v) {
   char b[96];
@@ -88,6 +92,19 @@ struct Simulation::Impl {
   double worst_balance = 0;
   double perforation_time = -1;
   double last_attached_touch = -1;  // last check that found a node attached to the clamps on the projectile
+  // Friction-work windows (docs/MODEL.md §8): the ledger's yarn-yarn friction work (modelled
+  // part) at the first broken element, at the last step the projectile touched any node, and at
+  // the last check that found an attached node on it; perforation_time is one of those two.
+  double first_break_time = -1;
+  double friction_at_first_break = 0;
+  double friction_at_last_contact = 0;
+  double friction_at_attached_touch = 0;
+  double friction_at_perforation = 0;
+  // Where the fabric failed (docs/MODEL.md §8): the in-plane distance from the impact point of
+  // the first broken element (nearest, if several broke in that step), and the elements broken
+  // before perforation (or by the end) and those of them within kNearClamp_m of a clamp.
+  double first_break_distance = -1;
+  double broken_before_perforation = -1, broken_near_clamp = -1;
   int extensions = 0;               // times extend_to reopened the run
   double end_time = 0;              // the model's, or later when a study extends an undecided run (extend_to)
   double wall_s = 0;
@@ -132,6 +149,43 @@ struct Simulation::Impl {
     for (int e = 0; e < m.element_count; ++e)
       if (m.yarn_family[m.elem_yarn[e]] == family && solver->broken(e)) n += elem_weight[e];
     return int(std::lround(n));
+  }
+  // An element's midpoint in the initial configuration, measured in the fabric's plane from
+  // the projectile's aim point (or from the nearest clamped edge).
+  Vec3d element_mid0(int e) const {
+    const Model& m = model();
+    return 0.5 * (m.x0[m.elem_a[e]] + m.x0[m.elem_b[e]]);
+  }
+  double nearest_break_to_impact() const {
+    const Model& m = model();
+    double best = -1;
+    for (int e = 0; e < m.element_count; ++e) {
+      if (!solver->broken(e)) continue;
+      const Vec3d d = element_mid0(e) - m.projectile_x0;
+      const double r = std::hypot(d.x(), d.y());
+      if (best < 0 || r < best) best = r;
+    }
+    return best;
+  }
+  double clamp_distance(const Vec3d& x) const {
+    const Model& m = model();
+    double d = std::numeric_limits<double>::infinity();
+    if (m.clamped.left) d = std::min(d, x.x() + m.half_width);
+    if (m.clamped.right) d = std::min(d, m.half_width - x.x());
+    if (m.clamped.bottom) d = std::min(d, x.y() + m.half_length);
+    if (m.clamped.top) d = std::min(d, m.half_length - x.y());
+    return d;
+  }
+  void count_breaks(double* broken, double* near_clamp) const {
+    const Model& m = model();
+    double n = 0, nc = 0;
+    for (int e = 0; e < m.element_count; ++e) {
+      if (!solver->broken(e)) continue;
+      n += elem_weight[e];
+      if (clamp_distance(element_mid0(e)) <= kNearClamp_m) nc += elem_weight[e];
+    }
+    *broken = n;
+    *near_clamp = nc;
   }
   // Loaded crossings (normal force > 0), sliding and stuck, whole fabric.
   void loaded_crossings(int* sliding, int* stuck) const {
@@ -185,11 +239,15 @@ struct Simulation::Impl {
         Vec3d nrm;
         if (m.shape.sdf(Vec3d(solver->position(i) - xp), nrm) <= kTouching_m) {
           last_attached_touch = solver->time();
+          friction_at_attached_touch = solver->ledger().friction_work_J;
           return false;
         }
       }
       last_touch = last_attached_touch >= 0 ? last_attached_touch : solver->time();
-      if (last_attached_touch < 0) last_attached_touch = solver->time();
+      if (last_attached_touch < 0) {
+        last_attached_touch = solver->time();
+        friction_at_attached_touch = solver->ledger().friction_work_J;
+      }
     }
     if (solver->time() - last_touch < kPerforationConfirm_s) return false;
     if (attached.empty()) attached = attached_nodes();
@@ -202,6 +260,8 @@ struct Simulation::Impl {
       if ((rel - ahead * m.flight_dir).squaredNorm() < R * R) return false;
     }
     perforation_time = last_touch;  // the last contact with the attached fabric
+    count_breaks(&broken_before_perforation, &broken_near_clamp);
+    friction_at_perforation = last_touch == last_attached_touch ? friction_at_attached_touch : friction_at_last_contact;
     return true;
   }
 
@@ -253,6 +313,13 @@ struct Simulation::Impl {
     if (status != RunStatus::running) return false;
     solver->step();
     const long n = solver->steps();
+    // The friction windows: cheap per step (the solver keeps the counts and the ledger).
+    if (solver->last_contact_time() == solver->time()) friction_at_last_contact = solver->ledger().friction_work_J;
+    if (first_break_time < 0 && solver->broken_count(warp) + solver->broken_count(weft) > 0) {
+      first_break_time = solver->time();
+      friction_at_first_break = solver->ledger().friction_work_J;
+      first_break_distance = nearest_break_to_impact();
+    }
     if (n % sample_every == 0) {
       history.push_back(sample());
       worst_balance = std::max(worst_balance, std::abs(history.back().balance_error));
@@ -426,6 +493,14 @@ void impl_io(Ar& ar, I& s) {
   ar.pod(s.worst_balance);
   ar.pod(s.perforation_time);
   ar.pod(s.last_attached_touch);
+  ar.pod(s.first_break_time);
+  ar.pod(s.friction_at_first_break);
+  ar.pod(s.friction_at_last_contact);
+  ar.pod(s.friction_at_attached_touch);
+  ar.pod(s.friction_at_perforation);
+  ar.pod(s.first_break_distance);
+  ar.pod(s.broken_before_perforation);
+  ar.pod(s.broken_near_clamp);
   ar.pod(s.extensions);
   ar.pod(s.end_time);
   ar.pod(s.wall_s);
@@ -521,6 +596,14 @@ Summary Simulation::summary() const {
   s.perforation_time_s = I.perforation_time;
   s.energy_balance_error = I.worst_balance;
   s.friction_work_J = I.solver->ledger().friction_work_J * m.symmetry_factor;
+  s.first_break_time_s = I.first_break_time;
+  s.friction_work_to_first_break_J = I.first_break_time >= 0 ? I.friction_at_first_break * m.symmetry_factor : s.friction_work_J;
+  s.friction_work_to_perforation_J = s.perforated ? I.friction_at_perforation * m.symmetry_factor : s.friction_work_J;
+  s.first_break_distance_m = I.first_break_distance;
+  double nb = I.broken_before_perforation, nc = I.broken_near_clamp;
+  if (nb < 0) I.count_breaks(&nb, &nc);  // not perforated: every break so far
+  s.broken_before_perforation = int(std::lround(nb));
+  s.broken_near_clamp = int(std::lround(nc));
   s.model = m.symmetry_label;
   s.model_reason = m.symmetry_reason;
   s.contact_model = to_string(m.contact);

@@ -235,7 +235,18 @@ bool scene_section(GuiApp& app) {
         "c_min: centre distance of two fully flattened yarns (fabric.flattened_gap_mm, docs/MODEL.md section 4).");
     changed |= slider_si("F_half (N)", &s.fabric.compression_force_n, 1, 0.05, 20, "%.2f", true);
     help_marker(
-        "F_half: normal force that closes half of D - c_min (fabric.compression_force_n, docs/MODEL.md section 4).");
+        "F_half: normal force that closes half of the packing stage (fabric.compression_force_n, docs/MODEL.md "
+        "section 4).");
+    changed |= slider_si("c_pack (mm)", &s.fabric.packed_gap_m, 1e3, 0.05, 0.2, "%.3f");
+    help_marker(
+        "c_pack: centre distance once the fibres are packed, before they flatten (fabric.packed_gap_mm). At or below "
+        "c_min the law has one stage (the default); above it, the last c_pack - c_min closes only at forces near "
+        "F_flat (docs/MODEL.md section 4).");
+    ImGui::BeginDisabled(s.fabric.packed_gap_m <= s.fabric.flattened_gap_m);
+    changed |= slider_si("F_flat (N)", &s.fabric.flattening_force_n, 1, 1, 500, "%.0f", true);
+    help_marker("F_flat: normal force that closes half of the flattening stage c_pack - c_min "
+                "(fabric.flattening_force_n).");
+    ImGui::EndDisabled();
     ImGui::EndDisabled();
     ImGui::TreePop();
   }
@@ -821,6 +832,14 @@ void draw_status_panel(GuiApp& app) {
   else
     ImGui::TextColored(kGood, "not perforated (yet)");
   ImGui::Text("absorbed %.2f J, friction %.2f J", s.energy_absorbed_J, s.friction_work_J);
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("yarn-yarn friction work: %.2f J up to the first break%s, %.2f J up to perforation%s, %.2f J "
+                      "over the run",
+                      s.friction_work_to_first_break_J, s.first_break_time_s >= 0 ? "" : " (none yet)",
+                      s.friction_work_to_perforation_J, s.perforated ? "" : " (not perforated)", s.friction_work_J);
+  if (s.first_break_time_s >= 0)
+    ImGui::Text("first break %.1f \xC2\xB5s, %.1f mm from impact", s.first_break_time_s * 1e6,
+                s.first_break_distance_m * 1e3);
   ImGui::Text("broken yarns %d warp, %d weft", s.broken_warp_yarns, s.broken_weft_yarns);
   ImGui::Text("max strain %.2f %%, balance %.1e", s.max_strain * 100, s.energy_balance_error);
   if (!v.message.empty()) ImGui::TextColored(kBad, "%s", v.message.c_str());

@@ -1001,17 +1001,55 @@ RAVEL_INLINE bool YarnContact<Real>::pass_normal(int c, Real alpha, bool last, c
   return true;
 }
 
-// The compliant part of a crossing's normal contact: c(f) = c_min + span / (1 + f / F_half)
-// taken implicitly, at the end of the correction. With s the distance above c_min, q the
-// relative displacement the impulse makes (q = kap (f - f_acc), kap = dt^2 winv) and f_acc the
-// normal force the crossing has already had this step:
-//   f_acc + (s - s_p) / kap = F_half (span / s - 1)
+// The compliant part of a crossing's normal contact, taken implicitly at the end of the
+// correction. The law (docs/MODEL.md §4) has two stages: with s the distance above c_min,
+//   s(f) = B / (1 + f / F_flat) + A / (1 + f / F_half),   A = c0 - c_pack, B = c_pack - c_min,
+// the fibres packing (A, at the force scale F_half) and then flattening (B, at F_flat). With q
+// the relative displacement the impulse makes (q = kap (f - f_acc), kap = dt^2 winv) and f_acc
+// the normal force the crossing has already had this step, the step ends where
+//   s_p + kap (f - f_acc) = s(f).
+// One stage (B = 0) is the quadratic
 //   s^2 + (kap (f_acc + F_half) - s_p) s - kap F_half span = 0,
-// whose positive root is taken. An implicit update is stable at any stiffness: as f grows
-// the law stiffens without bound (c -> c_min), and the explicit force of a prototype
-// chattered there. It dissipates (like the rigid correction it becomes at high force):
-// the work the impulse takes beyond the law's stored energy is booked as compression_loss.
+// whose positive root is taken; two stages are solved for f by Newton's method from f_acc (the
+// left side minus s(f) is increasing and concave in f, so the iterates rise monotonically to
+// the root). An implicit update is stable at any stiffness: as f grows the law stiffens without
+// bound (c -> c_min), and the explicit force of a prototype chattered there. It dissipates (like
+// the rigid correction it becomes at high force): the work the impulse takes beyond the law's
+// stored energy is booked as compression_loss.
 // s_p: distance above c_min after the rigid part (>= 0); P: the rigid part's impulse.
+namespace {
+struct CompressionLaw {
+  double A, Fh, B, Ff;  // packing stage (span, force), flattening stage (span, force)
+  double s_of(double f) const { return A / (1 + f / Fh) + (B > 0 ? B / (1 + f / Ff) : 0.0); }
+  double ds_df(double f) const {
+    const double a = 1 + f / Fh, b = 1 + f / Ff;
+    return -A / (Fh * a * a) - (B > 0 ? B / (Ff * b * b) : 0.0);
+  }
+  // The force at which the law's distance is s (0 < s <= A + B), by Newton's method from f0
+  // (s_of is convex and decreasing, so iterates from the left of the root rise monotonically).
+  double f_of(double s, double f0) const {
+    double f = std::max(0.0, f0);
+    if (s_of(f) < s) f = 0;  // start left of the root
+    for (int it = 0; it < 60; ++it) {
+      const double df = (s_of(f) - s) / -ds_df(f);
+      f += df;
+      if (std::abs(df) <= 1e-13 * (1 + f)) break;
+    }
+    return f;
+  }
+  // Stored energy at force f: the integral of f dc from c(f) to c0, sum over the stages of
+  // span F (ln(1 + f / F) - (f / F) / (1 + f / F)).
+  double energy(double f) const {
+    auto stage = [f](double span, double F) {
+      if (span <= 0) return 0.0;
+      const double x = f / F;
+      return span * F * (std::log1p(x) - x / (1 + x));
+    };
+    return stage(A, Fh) + stage(B, Ff);
+  }
+};
+}  // namespace
+
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real s_p, Real span, Real winv, Real P,
                                               Real approach, const V3& u, CrossingImpulse& r) {
@@ -1019,9 +1057,25 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
   const double dt = model_.dt;
   const double kap = dt * dt * double(winv), Fh = cr.compression_force;
   const double f_acc = s_.cr[c].fn_step + double(P) / dt, sp = std::max(0.0, double(s_p)), sz = double(span);
-  const double b = kap * (f_acc + Fh) - sp, k4 = 4 * kap * Fh * sz;
-  const double root = std::sqrt(b * b + k4);
-  double s = b > 0 ? 0.5 * k4 / (b + root) : 0.5 * (root - b);  // the positive root, without cancellation
+  const double B = std::max(0.0, cr.packed_distance - cr.flattened_distance);
+  const CompressionLaw law{sz - B, Fh, B, cr.flattening_force};
+  double s;
+  if (B <= 0) {
+    const double b = kap * (f_acc + Fh) - sp, k4 = 4 * kap * Fh * sz;
+    const double root = std::sqrt(b * b + k4);
+    s = b > 0 ? 0.5 * k4 / (b + root) : 0.5 * (root - b);  // the positive root, without cancellation
+  } else if (sp >= law.s_of(f_acc)) {
+    s = sp;  // already as far apart as the law asks at the force so far: no impulse
+  } else {
+    double f = f_acc;
+    for (int it = 0; it < 60; ++it) {
+      const double g = sp + kap * (f - f_acc) - law.s_of(f);
+      const double df = -g / (kap - law.ds_df(f));
+      f += df;
+      if (std::abs(df) <= 1e-13 * (1 + f)) break;
+    }
+    s = sp + kap * (f - f_acc);
+  }
   double q = s - sp, qv = q;
   // The force may exceed last step's only by what stops this step's approach (the rigid
   // contact's force): a crossing loads at the pace its yarns press, and unloads elastically.
@@ -1031,7 +1085,7 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
   const double qv_max = kap * (s_.cr[c].fn + double(approach) / (dt * double(winv)) - f_acc);
   if (model_.split_penetration && q > std::max(0.0, qv_max)) {
     qv = std::max(0.0, qv_max);
-    s = Fh * sz / (f_acc + qv / kap + Fh);
+    s = B <= 0 ? Fh * sz / (f_acc + qv / kap + Fh) : law.s_of(f_acc + qv / kap);
     q = s - sp;
     const V3 S = (alpha * Real(compressed_shift(Real(q - qv), Real(cr.contact_distance))) / Real(winv)) * u;
     r.S = r.has_s ? V3(r.S + S) : S;
@@ -1047,10 +1101,13 @@ RAVEL_INLINE void YarnContact<Real>::compress(int c, Real alpha, bool last, Real
     q = 0;
   }
   if (last) {
-    // The law's stored energy at the distance this crossing now enforces:
-    // integral of F_half (span / x - 1) dx from s to span.
+    // The law's stored energy at the distance this crossing now enforces: the integral of the
+    // law's force from that distance to c0.
     const double se = std::min(sz, sp + q);
-    s_.cr[c].comp_u = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
+    if (B <= 0)
+      s_.cr[c].comp_u = se > 0 ? Fh * (sz * std::log(sz / se) - (sz - se)) : 0.0;
+    else
+      s_.cr[c].comp_u = se > 0 && se < sz ? law.energy(law.f_of(se, f_acc + qv / kap)) : 0.0;
   }
 }
 

@@ -3,6 +3,7 @@
 // ledger's friction term is a dissipation; the state hashes are the recorded ones.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "fixture.h"
@@ -47,6 +48,55 @@ TEST(Friction, WorkIsDissipation) {
     EXPECT_GT(stick_max, 0.0);
     EXPECT_GT(sim.history().back().ledger.friction_work_J, 0.0);
     EXPECT_LT(sim.summary().energy_balance_error, 5e-3);
+  }
+}
+
+// The friction-work windows of the summary (docs/MODEL.md §8) are the ledger's yarn-yarn
+// friction work at the step of the first break and at the perforation time (the projectile's
+// last touch of the attached fabric), taken in the step loop. Checked against the history,
+// which samples the same ledger: at each window's time the sampled friction work brackets
+// it within one history interval's change (plus rounding). Without friction every window is
+// zero; with it they rise in order (friction work only grows, up to the stick springs' few
+// hundredths of a J, bounded as in WorkIsDissipation).
+double history_friction_at(const std::vector<HistoryRow>& h, double t, double* spread) {
+  for (size_t i = 1; i < h.size(); ++i) {
+    if (h[i].t_s < t) continue;
+    const double a = h[i - 1].ledger.friction_work_J, b = h[i].ledger.friction_work_J;
+    *spread = std::abs(b - a);
+    const double w = (t - h[i - 1].t_s) / std::max(1e-30, h[i].t_s - h[i - 1].t_s);
+    return a + std::clamp(w, 0.0, 1.0) * (b - a);
+  }
+  *spread = 0;
+  return h.back().ledger.friction_work_J;
+}
+
+TEST(Friction, WorkWindowsAreTheLedgerAtFirstBreakAndPerforation) {
+  const std::vector<std::string> base{"fabric.width_mm=36", "fabric.length_mm=36", "projectile.diameter_mm=6",
+                                      "projectile.mass_g=2", "projectile.velocity_mps=200"};
+  for (const char* mu : {"yarn.friction=0", "yarn.friction=0.2"}) {
+    SCOPED_TRACE(mu);
+    Simulation sim(test::scene_with(base + std::vector<std::string>{mu}));
+    sim.run();
+    const Summary s = sim.summary();
+    ASSERT_TRUE(s.perforated) << s.diagnosis;
+    ASSERT_GT(s.first_break_time_s, 0.0);
+    EXPECT_LT(s.first_break_time_s, s.perforation_time_s);
+    const double e0 = sim.history().front().ledger.total();
+    if (std::string(mu) == "yarn.friction=0") {
+      EXPECT_EQ(s.friction_work_J, 0.0);
+      EXPECT_EQ(s.friction_work_to_first_break_J, 0.0);
+      EXPECT_EQ(s.friction_work_to_perforation_J, 0.0);
+      continue;
+    }
+    EXPECT_GT(s.friction_work_to_first_break_J, 0.0);
+    EXPECT_LE(s.friction_work_to_first_break_J, s.friction_work_to_perforation_J + 1e-6 * e0);
+    EXPECT_LE(s.friction_work_to_perforation_J, s.friction_work_J + 1e-6 * e0);
+    EXPECT_LT(s.friction_work_to_first_break_J, 0.5 * s.friction_work_J);  // most of it comes after the first break
+    double spread = 0;
+    const double at_break = history_friction_at(sim.history(), s.first_break_time_s, &spread);
+    EXPECT_NEAR(s.friction_work_to_first_break_J, at_break, spread + 1e-9 * e0);
+    const double at_perf = history_friction_at(sim.history(), s.perforation_time_s, &spread);
+    EXPECT_NEAR(s.friction_work_to_perforation_J, at_perf, spread + 1e-9 * e0);
   }
 }
 

@@ -32,6 +32,17 @@ bool any_has(const std::vector<std::string>& v, const std::string& needle) {
 
 #define EXPECT_HAS(haystack, needle) EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << haystack
 
+// The two-stage compression law's keys: the packed distance must lie below the rest distance
+// (0.20 mm at the default 0.40 mm thickness), forces must be positive, and a value typed in
+// micrometres is caught as a unit slip.
+TEST(SceneValidation, TwoStageCompressionKeys) {
+  EXPECT_HAS(error_of("[fabric]\npacked_gap_mm = 0.25\n"),
+             "test.toml:2: fabric.packed_gap_mm: the packed centre distance (0.25 mm) must be below the rest distance");
+  EXPECT_HAS(error_of("[fabric]\nflattening_force_n = -5\n"), "fabric.flattening_force_n");
+  EXPECT_HAS(error_of("[fabric]\npacked_gap_mm = 130\n"), "fabric.packed_gap_mm");
+  EXPECT_EQ(error_of("[fabric]\npacked_gap_mm = 0.13\nflattening_force_n = 50\n"), "");
+}
+
 TEST(SceneValidation, ChecksAfterParsingNameTheLineOfTheKey) {
   // The geometry check runs after parsing; it still points at the line the value is on.
   EXPECT_HAS(error_of("name = \"x\"\n[fabric]\nweave = \"plain\"\nwidth_mm = 1.0\n"),
