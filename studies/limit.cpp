@@ -1,4 +1,5 @@
 #include "limit.h"
+#include "limit_internal.h"
 
 #include <algorithm>
 #include <array>
@@ -122,6 +123,37 @@ LambertJonas fit_lambert_jonas(const std::vector<double>& v_in, const std::vecto
   return fit;
 }
 
+void warn_non_monotone(LimitResult& res) {
+  const double lo = res.lo_mps, hi = res.hi_mps;
+  for (const auto& s : res.runs) {
+    if (s.failed || s.cancelled || (!s.decided && !s.perforated)) continue;
+    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
+      char b[200];
+      std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
+                    s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
+      res.warnings.push_back(b);
+    }
+  }
+}
+
+void describe_error(LimitResult& res) {
+  if (!res.bracketed) {
+    res.error_mps = -1;
+    res.error_note = "no bracket: no answer";
+    return;
+  }
+  res.error_mps = 0.5 * (res.hi_mps - res.lo_mps);
+  std::string note =
+      "half the final bracket: its ends are full runs that stopped (lo) and perforated (hi), so the limit lies in it "
+      "when perforation is a threshold in velocity; the rules add 0 m/s";
+  bool non_monotone = false;
+  for (const auto& w : res.warnings) non_monotone |= w.rfind("non-monotone", 0) == 0;
+  if (non_monotone) note += "; but some runs contradict a threshold (see warnings): the error is larger";
+  if (res.runs_cancelled > 0)
+    note += "; " + std::to_string(res.runs_cancelled) + " runs stopped as moot, none of them a bracket end";
+  res.error_note = note;
+}
+
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit) {
   const auto t0 = std::chrono::steady_clock::now();
   LimitResult res;
@@ -183,6 +215,8 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
                                     : "no velocity up to the maximum perforated");
     res.lo_mps = lo;
     res.hi_mps = hi;
+    res.rounds = int(res.runs.size());
+    describe_error(res);
     res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return res;
   }
@@ -240,15 +274,9 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   }
   // Monotonicity check over every run made, the fit's runs among them (a run well above the
   // bracket that stops says the outcome is not a threshold in velocity).
-  for (const auto& s : res.runs) {
-    if (s.failed || (!s.decided && !s.perforated)) continue;
-    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
-      char b[200];
-      std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
-                    s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
-      res.warnings.push_back(b);
-    }
-  }
+  warn_non_monotone(res);
+  res.rounds = int(res.runs.size());
+  describe_error(res);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }
@@ -315,6 +343,15 @@ nlohmann::ordered_json shot_to_json(const Shot& s) {
   q["broken_warp_yarns"] = s.broken_warp_yarns;
   q["broken_weft_yarns"] = s.broken_weft_yarns;
   q["wall_time_s"] = s.wall_time_s;
+  if (s.cancelled) {
+    q["cancelled"] = true;
+    q["cancel_reason"] = s.cancel_reason;
+  }
+  if (s.started_s >= 0) {
+    q["started_s"] = s.started_s;
+    q["ended_s"] = s.ended_s;
+    q["round"] = s.round;
+  }
   return q;
 }
 
@@ -336,6 +373,11 @@ Shot shot_from_json(const nlohmann::json& q) {
   s.broken_warp_yarns = q.value("broken_warp_yarns", 0);
   s.broken_weft_yarns = q.value("broken_weft_yarns", 0);
   s.wall_time_s = num("wall_time_s", 0);
+  s.cancelled = q.value("cancelled", false);
+  s.cancel_reason = q.value("cancel_reason", "");
+  s.started_s = num("started_s", -1);
+  s.ended_s = num("ended_s", -1);
+  s.round = q.value("round", 0);
   return s;
 }
 
@@ -360,21 +402,41 @@ LimitResult limit_from_json(const std::string& text) {
   for (const auto& q : j["runs"]) r.runs.push_back(shot_from_json(q));
   for (const auto& w : j["warnings"]) r.warnings.push_back(w.get<std::string>());
   r.wall_time_s = j.value("wall_time_s", 0.0);
+  r.interrupted = j.value("interrupted", false);
+  r.method = j.value("method", "reference");
+  if (j.contains("rules"))
+    for (const auto& q : j["rules"])
+      if (q.is_object()) r.rules.push_back(q.value("name", ""));
+  r.jobs = j.value("jobs", 1);
+  r.rounds = j.value("rounds", 0);
+  r.runs_cancelled = j.value("runs_cancelled", 0);
+  if (j.contains("error_mps") && j["error_mps"].is_number()) r.error_mps = j["error_mps"].get<double>();
+  r.error_note = j.value("error_note", "");
   return r;
 }
 
-ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
-                      const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run,
-                      const std::string& cache_dir) {
-  // What a kept run must have been run with to stand for a run now: the resolved scene
-  // (velocity aside) and the ravel build.
-  std::string fingerprint;
-  if (!cache_dir.empty()) {
-    Scene base = load_scene(scene_path, overrides);
-    base.projectile.velocity_mps = 0;
-    fingerprint = scene_to_toml(base) + "\nravel " + version() + " (source " + source_commit() + ")";
-  }
-  return [=](double v, const std::string&) {
+namespace {
+
+// What a kept run must have been run with to stand for a run now: the resolved scene
+// (velocity aside) and the ravel build.
+std::string run_fingerprint(const std::string& scene_path, const std::vector<std::string>& overrides) {
+  Scene base = load_scene(scene_path, overrides);
+  base.projectile.velocity_mps = 0;
+  return scene_to_toml(base) + "\nravel " + version() + " (source " + source_commit() + ")";
+}
+
+std::string kept_path(const std::string& cache_dir, double v) {
+  char name[64];
+  std::snprintf(name, sizeof name, "/runs/v%012.6f.json", v);
+  return cache_dir + name;
+}
+
+}  // namespace
+
+RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>& overrides,
+                   std::function<void(const Simulation&)> on_run, const std::string& cache_dir) {
+  const std::string fingerprint = cache_dir.empty() ? std::string() : run_fingerprint(scene_path, overrides);
+  return [=](double v, const std::string&, const std::atomic<bool>* stop) {
     auto ov = overrides;
     char b[64];
     std::snprintf(b, sizeof b, "projectile.velocity_mps=%.6f", v);
@@ -382,9 +444,7 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     ov.push_back("output.progress=false");
     std::string kept;
     if (!cache_dir.empty()) {
-      char name[64];
-      std::snprintf(name, sizeof name, "/runs/v%012.6f.json", v);
-      kept = cache_dir + name;
+      kept = kept_path(cache_dir, v);
       std::error_code ec;
       if (std::filesystem::exists(kept, ec)) {
         const auto j = nlohmann::json::parse(read_text_file(kept), nullptr, false);
@@ -397,20 +457,26 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     }
     Scene scene = load_scene(scene_path, ov);
     Simulation sim(scene);
-    sim.run(interrupt);
+    sim.run(stop);
     // A run that reached its end time undecided never counts as stopped (SPEC §8): it goes
     // on to solver.max_end_time_us.
-    if (sim.extend_to(scene.solver.max_end_time_s)) sim.run(interrupt);
+    if (sim.extend_to(scene.solver.max_end_time_s)) sim.run(stop);
     const Summary s = sim.summary();
-    if (s.status == RunStatus::interrupted) throw std::runtime_error("interrupted");
     Shot shot;
+    shot.velocity_mps = v;
+    if (s.status == RunStatus::interrupted) {  // stopped: no outcome, nothing kept
+      shot.cancelled = true;
+      shot.decided = false;
+      shot.end_reason = "cancelled";
+      shot.wall_time_s = s.wall_time_s;
+      return shot;
+    }
     if (s.status == RunStatus::diverged) {
       shot.failed = true;
       shot.error = "diverged: " + s.diagnosis;
     } else if (on_run) {
       on_run(sim);
     }
-    shot.velocity_mps = v;
     shot.perforated = s.perforated;
     shot.residual_velocity_mps = s.residual_velocity_mps;
     shot.energy_absorbed_J = s.energy_absorbed_J;
@@ -429,6 +495,35 @@ ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::stri
     }
     return shot;
   };
+}
+
+ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
+                      const std::atomic<bool>* interrupt, std::function<void(const Simulation&)> on_run,
+                      const std::string& cache_dir) {
+  RunFn run = scene_runner(scene_path, overrides, std::move(on_run), cache_dir);
+  return [run, interrupt](double v, const std::string& why) {
+    Shot s = run(v, why, interrupt);
+    if (s.cancelled) throw std::runtime_error("interrupted");
+    return s;
+  };
+}
+
+std::vector<Shot> kept_runs(const std::string& scene_path, const std::vector<std::string>& overrides,
+                            const std::string& cache_dir) {
+  std::vector<Shot> out;
+  std::error_code ec;
+  if (cache_dir.empty() || !std::filesystem::is_directory(cache_dir + "/runs", ec)) return out;
+  const std::string fingerprint = run_fingerprint(scene_path, overrides);
+  for (const auto& e : std::filesystem::directory_iterator(cache_dir + "/runs", ec)) {
+    if (e.path().extension() != ".json") continue;
+    const auto j = nlohmann::json::parse(read_text_file(e.path().string()), nullptr, false);
+    if (j.is_discarded() || j.value("fingerprint", std::string()) != fingerprint || !j.contains("shot")) continue;
+    Shot shot = shot_from_json(j["shot"]);
+    shot.resumed = true;
+    out.push_back(shot);
+  }
+  std::sort(out.begin(), out.end(), [](const Shot& a, const Shot& b) { return a.velocity_mps < b.velocity_mps; });
+  return out;
 }
 
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
@@ -465,6 +560,46 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   j["start_mps"] = opt.start_mps;
   j["growth"] = opt.growth;
   j["growth_accel"] = opt.growth_accel;
+  j["method"] = r.method;
+  j["method_note"] = r.method == "fast"
+                         ? "ravel limit (fast search): runs in flight at once, each run stopped once moot; the bracket's "
+                           "ends are full runs (docs/studies.md)"
+                         : "ravel limit --reference: bracketing from start_mps by growth, then plain bisection, one run "
+                           "at a time, every run to its end (docs/studies.md)";
+  {
+    // Each rule: what it does and the error it may add to the answer.
+    static const std::vector<std::pair<std::string, std::string>> described{
+        {"ksection", "jobs runs in flight: a free bracket is cut into jobs + 1 parts, a slot that frees splits the part "
+                     "most likely to hold the limit"},
+        {"cancel_moot", "a run whose outcome can no longer move the bracket is stopped at once (listed as cancelled)"},
+        {"residual_guess", "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the "
+                           "next points (75 % of a prior, 25 % uniform)"},
+        {"two_sided_start", "the first round tries start_mps and start_mps / growth at once"},
+        {"reuse_fit_points", "fit runs only where no perforating run is within fit_reuse_window of BL x factor"}};
+    nlohmann::ordered_json rules = nlohmann::ordered_json::array();
+    for (const auto& name : r.rules) {
+      nlohmann::ordered_json q;
+      q["name"] = name;
+      for (const auto& [n, d] : described)
+        if (n == name) q["what"] = d;
+      q["error_mps"] = 0.0;  // none moves a bracket end: both are full runs
+      rules.push_back(q);
+    }
+    j["rules"] = rules;
+  }
+  j["jobs"] = r.jobs;
+  j["rounds"] = r.rounds;
+  int finished = 0;
+  for (const auto& s : r.runs) finished += !s.cancelled;
+  j["runs_finished"] = finished;
+  j["runs_cancelled"] = r.runs_cancelled;
+  j["skipped_full_runs"] = r.runs_cancelled > 0;
+  if (r.runs_cancelled > 0)
+    j["skipped_note"] = "this search stopped " + std::to_string(r.runs_cancelled) +
+                        " runs before their end once their outcome was moot (each listed with cancelled: true); the "
+                        "reference runs every run to its end; no bracket end is a stopped run";
+  j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);
+  j["error_note"] = r.error_note;
   j["wall_time_s"] = r.wall_time_s;
   j["runs_per_hour"] = r.wall_time_s > 0 ? double(r.runs.size()) / (r.wall_time_s / 3600) : 0.0;
   return j.dump(2) + "\n";

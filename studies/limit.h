@@ -32,9 +32,20 @@ struct Shot {
   bool failed = false;   // the run diverged: its outcome means nothing
   std::string error;     // why
   bool resumed = false;  // read back from a kept run, not run now
+  // The fast search (find_ballistic_limit_fast) stops a run the moment its outcome became
+  // moot: it then has no outcome (decided = false, perforated = false, end_reason
+  // "cancelled") and says why; it is listed, never used.
+  bool cancelled = false;
+  std::string cancel_reason;
+  double started_s = -1;  // fast search: when the run started and ended, from the search's start
+  double ended_s = -1;
+  int round = 0;          // fast search: 1 + the deepest round of the runs finished before it started
 };
 
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
+// A run that can be stopped on its own: when `stop` becomes true the run ends at once and
+// comes back with cancelled = true (it is not kept in a cache).
+using RunFn = std::function<Shot(double velocity_mps, const std::string& purpose, const std::atomic<bool>* stop)>;
 
 struct LimitOptions {
   double start_mps = 100;  // first velocity tried
@@ -73,6 +84,19 @@ struct LimitResult {
   std::vector<std::string> warnings;
   double wall_time_s = 0;
   bool interrupted = false;  // the search stopped at an interruption: runs holds what finished
+  // How it was found: "reference" (find_ballistic_limit: bisection, one run at a time, every
+  // run to its end) or "fast" (find_ballistic_limit_fast), the rules that were on, and runs in
+  // flight at once.
+  std::string method = "reference";
+  std::vector<std::string> rules;
+  int jobs = 1;
+  int rounds = 0;          // the longest chain of runs each started after the one before ended
+  int runs_cancelled = 0;  // runs stopped before their end (fast search): listed, never used
+  // Error estimate of ballistic_limit_mps: half the final bracket (the limit is in it when the
+  // outcome is a threshold in velocity) plus what the rules may add (none of today's: each
+  // bracket end is a full run).
+  double error_mps = -1;
+  std::string error_note;
 };
 
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
@@ -93,6 +117,15 @@ std::string limit_progress(const std::vector<Shot>& runs, const LimitOptions& op
 ShootFn scene_shooter(const std::string& scene_path, const std::vector<std::string>& overrides,
                       const std::atomic<bool>* interrupt = nullptr, std::function<void(const Simulation&)> on_run = {},
                       const std::string& cache_dir = "");
+
+// scene_shooter's runs as a RunFn: each call runs with its own `stop` flag (the search sets
+// it when the run became moot, and on an interruption).
+RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>& overrides,
+                   std::function<void(const Simulation&)> on_run = {}, const std::string& cache_dir = "");
+// The runs kept in cache_dir/runs/ that stand for this scene and build (resumed = true), by
+// velocity: a fast search's `prior`.
+std::vector<Shot> kept_runs(const std::string& scene_path, const std::vector<std::string>& overrides,
+                            const std::string& cache_dir);
 
 // One run of limit.json's "runs" (or of a kept DIR/runs/ file) read back.
 Shot shot_from_json(const nlohmann::json& q);

@@ -2,6 +2,7 @@
 //   ravel sweep [SCENE] --vary key=start:stop:step|v1,v2,... [--vary ...] --out DIR
 //               [--jobs N] [--shard i/n] [--set k=v ...] [--quiet]
 //   ravel limit [SCENE] [--set k=v ...] --out DIR [--tolerance MPS] [--start MPS] [--no-fit]
+//               [--reference]
 //   ravel paper [--quick] [--jobs N] --out DIR
 // The logic lives in studies/ (ravel_studies); this file parses flags and prints.
 #include <unistd.h>
@@ -199,7 +200,8 @@ int cmd_limit(const Args& args) {
       return s;
     };
     if (verbose)
-      std::printf("limit: %s, tolerance %.3g m/s, runs end at perforation or rebound (at most %.0f us)\n",
+      std::printf("limit: %s, tolerance %.3g m/s, reference search (bisection, one run at a time), runs end at "
+                  "perforation or rebound (at most %.0f us)\n",
                   scene.name.c_str(), lo.tolerance_mps, scene.solver.max_end_time_s * 1e6);
     studies::LimitResult r;
     try {

@@ -98,6 +98,8 @@ std::vector<Command> make_table() {
                 {"start", "MPS", false, "the first velocity tried (default 100 m/s)"},
                 {"max-runs", "N", false, "give up after N runs (default 60)"},
                 {"no-fit", nullptr, false, "no extra runs for the Lambert-Jonas fit"},
+                {"reference", nullptr, false,
+                 "the reference search: bisection, one run at a time, every run to its end (docs/studies.md)"},
                 kQuiet}});
   t.push_back({"paper",
                "ravel paper --out DIR [options]",

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 
 #include "limit.h"
 #include "study_test_util.h"
@@ -282,6 +283,49 @@ TEST(BallisticLimit, RunsThatOutlastTheEndTimeAreExtended) {
   ASSERT_EQ(a.runs.size(), b.runs.size());
   for (size_t i = 0; i < a.runs.size(); ++i)
     EXPECT_EQ(a.runs[i].residual_velocity_mps, b.runs[i].residual_velocity_mps);
+}
+
+// limit.json says how the answer was found and how far off it may be: the reference's
+// method, rules (none), jobs (1), rounds (its run count) and an error of half the bracket;
+// the new keys read back, and every key of before is still written.
+TEST(BallisticLimit, LimitJsonStatesMethodAndErrorEstimate) {
+  LimitOptions o;
+  const auto r = find_ballistic_limit(synthetic_target(0.9, 2.0, 70.4), o, true);
+  ASSERT_TRUE(r.converged);
+  EXPECT_EQ(r.method, "reference");
+  EXPECT_TRUE(r.rules.empty());
+  EXPECT_EQ(r.rounds, int(r.runs.size()));
+  EXPECT_DOUBLE_EQ(r.error_mps, 0.5 * (r.hi_mps - r.lo_mps));
+  EXPECT_LE(std::abs(r.ballistic_limit_mps - 70.4), r.error_mps + 1e-12);
+  const std::string text = limit_json(r, o, "scene.toml", {"a=1"});
+  const auto j = nlohmann::json::parse(text);
+  for (const char* key : {"ballistic_limit_mps", "bracket_mps", "bracket_note", "tolerance_mps", "bracketed",
+                          "converged", "lambert_jonas", "runs", "warnings", "interrupted", "scene", "overrides",
+                          "start_mps", "growth", "growth_accel", "wall_time_s", "runs_per_hour", "method",
+                          "method_note", "rules", "jobs", "rounds", "runs_finished", "runs_cancelled",
+                          "skipped_full_runs", "error_mps", "error_note"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["method"], "reference");
+  EXPECT_EQ(j["skipped_full_runs"], false);
+  EXPECT_EQ(j["runs_finished"], int(r.runs.size()));
+  const auto back = limit_from_json(text);
+  EXPECT_EQ(back.method, "reference");
+  EXPECT_DOUBLE_EQ(back.error_mps, r.error_mps);
+  EXPECT_EQ(back.rounds, r.rounds);
+  // A cancelled run round-trips as cancelled.
+  Shot c;
+  c.velocity_mps = 90;
+  c.cancelled = true;
+  c.decided = false;
+  c.cancel_reason = "moot";
+  LimitResult withc = r;
+  withc.runs.push_back(c);
+  withc.runs_cancelled = 1;
+  const auto j2 = nlohmann::json::parse(limit_json(withc, o, "s", {}));
+  EXPECT_EQ(j2["skipped_full_runs"], true);
+  EXPECT_TRUE(j2.contains("skipped_note"));
+  EXPECT_EQ(j2["runs"].back()["cancelled"], true);
+  EXPECT_TRUE(limit_from_json(j2.dump()).runs.back().cancelled);
 }
 
 }  // namespace
