@@ -47,6 +47,27 @@ using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpo
 // comes back with cancelled = true (it is not kept in a cache).
 using RunFn = std::function<Shot(double velocity_mps, const std::string& purpose, const std::atomic<bool>* stop)>;
 
+// The fast search's rules (docs/studies.md, "The fast search"). Each can be turned off to
+// measure what it saves (`ravel tradeoff --limit`, bench/limit_speed); none of them moves
+// the bracket's guarantee: its ends are always full runs that stopped / perforated.
+struct FastRules {
+  // Several runs in flight (LimitOptions::jobs): when every slot is free the bracket is cut
+  // into jobs + 1 parts; a slot that frees while others run splits the part most likely to
+  // hold the limit.
+  bool ksection = true;
+  // A run whose outcome can no longer move the bracket (a sibling below it perforated, or
+  // one above it stopped, or the bracket reached the tolerance) is stopped at once.
+  bool cancel_moot = true;
+  // Residual velocities place the next points: Lambert-Jonas with p = 2 through the
+  // perforating runs closest to the limit (Vbl^2 = V^2 - (Vr/a)^2; a from two runs, 1 from
+  // one), as a prior that the points split; 25 % of the prior stays uniform over the bracket.
+  bool residual_guess = true;
+  // The first round tries the start and one growth step below it at once.
+  bool two_sided_start = true;
+  // The fit's runs only where no perforating run of the search is already within 10 % of the
+  // fit's velocity (BL x factor); a bracket run made moot that would be such a point is kept.
+  bool reuse_fit_points = true;
+};
 struct LimitOptions {
   double start_mps = 100;  // first velocity tried
   double growth = 1.5;     // bracketing factor
@@ -58,6 +79,10 @@ struct LimitOptions {
   double min_mps = 1, max_mps = 3000;
   int max_runs = 60;
   std::vector<double> fit_factors{1.25, 1.6, 2.2, 3.0};  // extra runs at BL x factor for the fit
+  // The fast search only (find_ballistic_limit_fast): runs in flight at once, and its rules.
+  int jobs = 1;
+  FastRules rules;
+  double fit_reuse_window = 0.10;  // a run within this fraction of BL x factor stands for that fit run
 };
 
 struct LambertJonas {
@@ -99,7 +124,38 @@ struct LimitResult {
   std::string error_note;
 };
 
+// What a fast search reports as it goes (hooks called on the search's own thread).
+struct LimitProgress {
+  double lo_mps = -1, hi_mps = -1;  // the bracket so far (-1: no such end yet)
+  double guess_mps = -1;            // the residual-velocity guess of the limit (-1: none)
+  int finished = 0, cancelled = 0;  // runs so far
+  std::vector<Shot> in_flight;      // velocity, purpose and started_s of each run still going
+  double elapsed_s = 0;
+  double eta_s = -1;                // time left (-1: not known yet)
+  int jobs = 1;
+  std::string line() const;         // "12 runs (2 cancelled), bracket 70.1 - 71.0 m/s, 2 in flight, ~40 s left"
+};
+
+struct LimitHooks {
+  std::function<void(const Shot&)> on_start;                          // a run started
+  std::function<void(const Shot&, const LimitProgress&)> on_finish;  // a run ended (or was cancelled)
+};
+
 LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, bool with_fit = true);
+
+// The fast search: the same bracket guarantee (a stopped and a perforating full run at most
+// tolerance apart) with opt.jobs runs in flight, each on its own thread, and opt.rules.
+// `prior` holds runs already made (e.g. kept in a cache folder by an interrupted search):
+// they count as finished runs. On `interrupt` every run is stopped and the result says
+// interrupted. Throws what `run` throws (other than stopping).
+LimitResult find_ballistic_limit_fast(const RunFn& run, const LimitOptions& opt, bool with_fit = true,
+                                      const std::atomic<bool>* interrupt = nullptr, const LimitHooks& hooks = {},
+                                      const std::vector<Shot>& prior = {});
+
+// The same search on a virtual clock, without threads: each run of `target` lasts its
+// Shot::wall_time_s (<= 0: 1 s) and a cancelled one ends when cancelled. Deterministic; for
+// tests and for what-if estimates of a rule's saving. wall_time_s is the virtual time.
+LimitResult simulate_fast_search(const ShootFn& target, const LimitOptions& opt, bool with_fit = true);
 
 // A progress line for a search that has made `runs` so far: "run k of about N, ~T left"
 // once the outcomes bracket the limit (N = k + the bisections that take the bracket below

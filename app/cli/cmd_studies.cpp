@@ -2,7 +2,7 @@
 //   ravel sweep [SCENE] --vary key=start:stop:step|v1,v2,... [--vary ...] --out DIR
 //               [--jobs N] [--shard i/n] [--set k=v ...] [--quiet]
 //   ravel limit [SCENE] [--set k=v ...] --out DIR [--tolerance MPS] [--start MPS] [--no-fit]
-//               [--reference]
+//               [--reference] [--jobs N]
 //   ravel paper [--quick] [--jobs N] --out DIR
 // The logic lives in studies/ (ravel_studies); this file parses flags and prints.
 #include <unistd.h>
@@ -162,20 +162,130 @@ int cmd_sweep(const Args& args) {
   }
 }
 
+namespace {
+
+// One run's outcome as the limit command prints it.
+std::string shot_outcome(const studies::Shot& s) {
+  std::string o = s.cancelled    ? "cancelled (" + s.cancel_reason + ")"
+                  : s.perforated ? "perforated"
+                  : s.decided    ? "stopped"
+                                 : "undecided at its end time (left out)";
+  if (s.perforated) o += ", residual " + fmt1(s.residual_velocity_mps) + " m/s";
+  if (s.failed) o += " -- FAILED: " + s.error;
+  return o;
+}
+
+// The residual-velocity chart (every run, and the fit where there is one) and the closing
+// lines of `ravel limit`, for either search.
+int limit_report(const CommonArgs& a, const Scene& scene, const studies::LimitResult& r, int resumed) {
+  studies::Chart c;
+  c.title = "Residual velocity vs impact velocity";
+  c.subtitle = scene.name;
+  c.x = {"impact velocity", "m/s"};
+  c.y = {"residual velocity", "m/s"};
+  studies::Series runs{"runs", {}, {}, studies::SeriesStyle::markers};
+  auto sorted = r.runs;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
+  for (const auto& s : sorted) {
+    if (s.failed || s.cancelled) continue;  // no outcome to show
+    runs.x.push_back(s.velocity_mps);
+    runs.y.push_back(s.perforated ? s.residual_velocity_mps : 0.0);
+  }
+  c.series.push_back(runs);
+  if (r.fit.ok && !runs.x.empty()) {
+    studies::Series fit{"Lambert-Jonas fit", {}, {}, studies::SeriesStyle::line};
+    const double v1 = runs.x.back();
+    for (int i = 0; i <= 200; ++i) {
+      const double v = r.fit.vbl_mps + (v1 - r.fit.vbl_mps) * i / 200.0;
+      fit.x.push_back(v);
+      fit.y.push_back(r.fit.residual_at(v));
+    }
+    c.series.push_back(fit);
+  }
+  studies::write_chart(c, a.out_dir + "/residual_velocity");
+  for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
+  const bool any_failed = std::any_of(r.runs.begin(), r.runs.end(), [](const auto& s) { return s.failed; });
+  if (!r.bracketed) {
+    std::printf("limit: no bracket found in %zu runs (%.1f s); see %s/limit.json\n", r.runs.size(), r.wall_time_s,
+                a.out_dir.c_str());
+    return any_failed ? exit_diverged : exit_failure;
+  }
+  const size_t full = r.runs.size() - size_t(r.runs_cancelled);
+  std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
+              r.ballistic_limit_mps, r.lo_mps, r.hi_mps, full, r.wall_time_s,
+              r.wall_time_s > 0 ? full / (r.wall_time_s / 3600) : 0.0);
+  std::printf("  %s search, %d job%s, %d rounds; error estimate +-%.2f m/s%s\n", r.method.c_str(), r.jobs,
+              r.jobs == 1 ? "" : "s", r.rounds, r.error_mps,
+              r.runs_cancelled ? (", " + std::to_string(r.runs_cancelled) + " moot runs stopped early").c_str() : "");
+  if (resumed)
+    std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
+  if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
+  if (r.fit.ok)
+    std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
+                r.fit.p, r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
+  else if (!has_switch(a, "no-fit"))
+    std::printf("  Lambert-Jonas: %s\n", r.fit.note.c_str());
+  std::printf("  %s/limit.json, %s/residual_velocity.{png,svg,csv}\n", a.out_dir.c_str(), a.out_dir.c_str());
+  return r.converged ? exit_ok : any_failed ? exit_diverged : exit_failure;
+}
+
+// `ravel limit` without --reference: the fast search (studies/limit_fast.cpp).
+int limit_fast(const CommonArgs& a, const Scene& scene, const std::string& scene_path,
+               const std::vector<std::string>& ov, const studies::LimitOptions& lo, bool verbose) {
+  const bool with_fit = !has_switch(a, "no-fit");
+  // Runs kept in DIR/runs/ by an earlier (interrupted) search count as made.
+  const auto prior = studies::kept_runs(scene_path, ov, a.out_dir);
+  if (verbose) {
+    std::printf("limit: %s, tolerance %.3g m/s, fast search: %d runs in flight, one solver thread each unless "
+                "--threads; runs end at perforation or rebound (at most %.0f us), moot ones are stopped\n",
+                scene.name.c_str(), lo.tolerance_mps, lo.jobs, scene.solver.max_end_time_s * 1e6);
+    for (const auto& s : prior)
+      std::printf("  kept    %8.2f m/s: %s  [kept from an earlier run, %.1f s]\n", s.velocity_mps,
+                  shot_outcome(s).c_str(), s.wall_time_s);
+    std::fflush(stdout);
+  }
+  studies::LimitHooks hooks;
+  hooks.on_finish = [&](const studies::Shot& s, const studies::LimitProgress& p) {
+    if (!verbose) return;
+    std::printf("  %-7s %8.2f m/s: %s  [%.1f s]\n", s.purpose.c_str(), s.velocity_mps, shot_outcome(s).c_str(),
+                s.wall_time_s);
+    std::printf("    %s\n", p.line().c_str());
+    std::fflush(stdout);
+  };
+  const studies::LimitResult r = studies::find_ballistic_limit_fast(
+      studies::scene_runner(scene_path, ov, {}, a.out_dir), lo, with_fit, &interrupt_flag(), hooks, prior);
+  write_file_atomic(a.out_dir + "/limit.json", studies::limit_json(r, lo, scene_path, ov));
+  if (r.interrupted) {
+    std::fprintf(stderr,
+                 "ravel: interrupted; %zu finished runs kept in %s/limit.json and %s/runs/ (rerun the same command "
+                 "to resume)\n",
+                 r.runs.size() - size_t(r.runs_cancelled), a.out_dir.c_str(), a.out_dir.c_str());
+    return exit_interrupted;
+  }
+  return limit_report(a, scene, r, int(prior.size()));
+}
+
+}  // namespace
+
 int cmd_limit(const Args& args) {
   try {
     CommonArgs a = parse_args(args, "limit");
     check_out_dir(a.out_dir);
     const std::string scene_path = scene_path_from(a);
-    const std::vector<std::string> ov = overrides_from(a);
+    const bool reference = has_switch(a, "reference");
+    std::vector<std::string> ov = overrides_from(a);
+    // The fast search runs several runs at once, each on one thread (unless --threads).
+    if (!reference && a.threads < 0) ov.push_back("solver.threads=1");
     const Scene scene = load_scene(scene_path, ov);
     studies::LimitOptions lo;
     lo.tolerance_mps = parse_positive(a, "tolerance", 1.0);
     lo.start_mps = parse_positive(a, "start", 100.0);
     lo.max_runs = int(parse_positive(a, "max-runs", 60));
+    lo.jobs = reference ? 1 : jobs_from(a);
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     const bool verbose = progress_wanted(a);
+    if (!reference) return limit_fast(a, scene, scene_path, ov, lo, verbose);
     // Finished runs are kept in DIR/runs/: an interrupted search resumes from them.
     auto shoot = studies::scene_shooter(scene_path, ov, &interrupt_flag(), {}, a.out_dir);
     std::vector<studies::Shot> finished;
@@ -225,53 +335,7 @@ int cmd_limit(const Args& args) {
       throw;
     }
     write_file_atomic(a.out_dir + "/limit.json", studies::limit_json(r, lo, scene_path, ov));
-    // The residual-velocity chart: every run, and the fit where there is one.
-    studies::Chart c;
-    c.title = "Residual velocity vs impact velocity";
-    c.subtitle = scene.name;
-    c.x = {"impact velocity", "m/s"};
-    c.y = {"residual velocity", "m/s"};
-    studies::Series runs{"runs", {}, {}, studies::SeriesStyle::markers};
-    auto sorted = r.runs;
-    std::sort(sorted.begin(), sorted.end(),
-              [](const auto& x, const auto& y) { return x.velocity_mps < y.velocity_mps; });
-    for (const auto& s : sorted) {
-      if (s.failed) continue;  // a diverged run has no outcome to show
-      runs.x.push_back(s.velocity_mps);
-      runs.y.push_back(s.perforated ? s.residual_velocity_mps : 0.0);
-    }
-    c.series.push_back(runs);
-    if (r.fit.ok && !sorted.empty()) {
-      studies::Series fit{"Lambert-Jonas fit", {}, {}, studies::SeriesStyle::line};
-      const double v1 = sorted.back().velocity_mps;
-      for (int i = 0; i <= 200; ++i) {
-        const double v = r.fit.vbl_mps + (v1 - r.fit.vbl_mps) * i / 200.0;
-        fit.x.push_back(v);
-        fit.y.push_back(r.fit.residual_at(v));
-      }
-      c.series.push_back(fit);
-    }
-    studies::write_chart(c, a.out_dir + "/residual_velocity");
-    for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
-    const bool any_failed = std::any_of(r.runs.begin(), r.runs.end(), [](const auto& s) { return s.failed; });
-    if (!r.bracketed) {
-      std::printf("limit: no bracket found in %zu runs (%.1f s); see %s/limit.json\n", r.runs.size(), r.wall_time_s,
-                  a.out_dir.c_str());
-      return any_failed ? exit_diverged : exit_failure;
-    }
-    std::printf("limit: ballistic limit %.2f m/s (bracket %.2f - %.2f m/s) from %zu runs in %.1f s (%.0f runs/hour)\n",
-                r.ballistic_limit_mps, r.lo_mps, r.hi_mps, r.runs.size(), r.wall_time_s,
-                r.wall_time_s > 0 ? r.runs.size() / (r.wall_time_s / 3600) : 0.0);
-    if (resumed)
-      std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
-    if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
-    if (r.fit.ok)
-      std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
-                  r.fit.p, r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
-    else if (!has_switch(a, "no-fit"))
-      std::printf("  Lambert-Jonas: %s\n", r.fit.note.c_str());
-    std::printf("  %s/limit.json, %s/residual_velocity.{png,svg,csv}\n", a.out_dir.c_str(), a.out_dir.c_str());
-    return r.converged ? exit_ok : any_failed ? exit_diverged : exit_failure;
+    return limit_report(a, scene, r, resumed);
   } catch (const std::exception& e) {
     return report_error(e);
   }

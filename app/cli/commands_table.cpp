@@ -94,12 +94,15 @@ std::vector<Command> make_table() {
                {kSet,
                 kOut,
                 kThreads,
+                {"jobs", "N", false,
+                 "runs in flight at once, each on one solver thread unless --threads (default: one per core)"},
                 {"tolerance", "MPS", false, "stop when the bracket is this narrow (default 1 m/s)"},
                 {"start", "MPS", false, "the first velocity tried (default 100 m/s)"},
                 {"max-runs", "N", false, "give up after N runs (default 60)"},
                 {"no-fit", nullptr, false, "no extra runs for the Lambert-Jonas fit"},
                 {"reference", nullptr, false,
-                 "the reference search: bisection, one run at a time, every run to its end (docs/studies.md)"},
+                 "the reference search: bisection, one run at a time, every run to its end (docs/studies.md); "
+                 "default: the fast search, the same bracket guarantee"},
                 kQuiet}});
   t.push_back({"paper",
                "ravel paper --out DIR [options]",

@@ -142,7 +142,8 @@ rc=$?
 [ $rc -eq 130 ] && ok || bad "interrupted limit: exit $rc"
 grep -q '"interrupted": true' "$tmp/lim/limit.json" && ok || bad "interrupted limit: no limit.json with interrupted"
 kept=$(ls "$tmp/lim/runs" | wc -l)
-listed=$(grep -c '"velocity_mps"' "$tmp/lim/limit.json")
+# limit.json lists the finished runs and, apart, the runs the interruption stopped (cancelled).
+listed=$(/usr/bin/python3 -c 'import json,sys; print(sum(not r.get("cancelled", False) for r in json.load(open(sys.argv[1]))["runs"]))' "$tmp/lim/limit.json")
 [ "$kept" -ge 2 ] && [ "$listed" -eq "$kept" ] && ok || bad "interrupted limit: $kept runs kept, $listed in limit.json"
 out=$("$ravel" limit "$tmp/pt.toml" --out "$tmp/lim" 2>&1)
 [ "$(grep -c 'kept from an earlier run' <<<"$out")" -eq "$kept" ] && ok || bad "resumed limit did not reuse the $kept kept runs: $out"

@@ -55,8 +55,9 @@ head -1 "$WORK/sweep/results.csv" | grep -q '^case,projectile.velocity_mps,yarn.
   --out "$WORK/sweep" >"$WORK/rerun.out" 2>&1
 grep -q "0 run, 6 already finished" "$WORK/rerun.out" || fail "rerun: $(cat "$WORK/rerun.out")"
 
-# limit on the cheap scene: limit.json with the bracket, the fit and every run.
-"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --out "$WORK/limit" >"$WORK/limit.out" 2>&1
+# limit on the cheap scene: limit.json with the bracket, the fit and every run. First the
+# reference search (its progress lines count the runs still to make) ...
+"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --reference --out "$WORK/limit" >"$WORK/limit.out" 2>&1
 rc=$?
 [[ $rc == 0 ]] || fail "limit exit $rc: $(cat "$WORK/limit.out")"
 # Progress: each run is followed by where the search stands, ending with "run N of N".
@@ -83,6 +84,34 @@ for r in j["runs"]:
     v = r["velocity_mps"]
     assert (v >= hi) if r["perforated"] else (v <= lo), r
     assert (r["residual_velocity_mps"] > 0) == r["perforated"], r
+PY
+
+# ... then the default, fast search (two runs in flight): the same guarantee, its method and
+# error estimate stated, moot runs listed as cancelled, and an answer within the tolerance of
+# the reference's.
+"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --jobs 2 --out "$WORK/limit_fast" >"$WORK/limit_fast.out" 2>&1
+rc=$?
+[[ $rc == 0 ]] || fail "fast limit exit $rc: $(cat "$WORK/limit_fast.out")"
+grep -qE '^    [0-9]+ runs.*bracket ' "$WORK/limit_fast.out" || fail "fast limit: no progress line with the bracket"
+/usr/bin/python3 - "$WORK/limit/limit.json" "$WORK/limit_fast/limit.json" <<'PY' || fail "fast limit.json values"
+import json, sys
+ref, j = (json.load(open(p)) for p in sys.argv[1:3])
+assert ref["method"] == "reference" and j["method"] == "fast", (ref["method"], j["method"])
+assert j["jobs"] == 2 and j["rules"], j
+bl, (lo, hi) = j["ballistic_limit_mps"], j["bracket_mps"]
+assert lo <= bl <= hi and 0 < hi - lo <= 2.0, (bl, lo, hi)
+assert abs(j["error_mps"] - (hi - lo) / 2) < 1e-9, j["error_mps"]
+assert abs(bl - ref["ballistic_limit_mps"]) <= 2.0, (bl, ref["ballistic_limit_mps"])
+cancelled = [r for r in j["runs"] if r.get("cancelled")]
+assert len(cancelled) == j["runs_cancelled"] and j["skipped_full_runs"] == (len(cancelled) > 0), j
+for r in j["runs"]:
+    if r.get("cancelled"):
+        assert not r["decided"] and r["cancel_reason"] and r["velocity_mps"] not in (lo, hi), r
+        continue
+    if r["failed"] or not r["decided"]:
+        continue
+    v = r["velocity_mps"]
+    assert (v >= hi) if r["perforated"] else (v <= lo), r
 PY
 
 if [[ $fails == 0 ]]; then echo "studies CLI: all passed"; else echo "studies CLI: $fails failed"; exit 1; fi

@@ -1,0 +1,364 @@
+// The fast ballistic-limit search (studies/limit_fast.cpp): each rule on synthetic targets
+// whose limit is known, against the reference search (find_ballistic_limit) at the same
+// settings: the same answer within the tolerance, in fewer rounds (or less time). Most run
+// on the virtual clock (simulate_fast_search: deterministic); a few on real threads, and
+// one on the cheap scene.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include "limit.h"
+#include "study_test_util.h"
+
+namespace ravel::studies {
+namespace {
+
+// Perforated iff V >= vbl, residual velocity by Lambert-Jonas (a, p). Each run lasts
+// `duration(v)` on the virtual clock (default 1 s).
+ShootFn target(double a, double p, double vbl, std::function<double(double)> duration = {}) {
+  return [=](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= vbl;
+    s.residual_velocity_mps = s.perforated ? a * std::pow(std::pow(v, p) - std::pow(vbl, p), 1 / p) : 0;
+    s.end_reason = s.perforated ? "perforated" : "rebounded";
+    s.wall_time_s = duration ? duration(v) : 1.0;
+    return s;
+  };
+}
+
+// A run near the limit lasts longest (the projectile is caught or pushes through slowly).
+std::function<double(double)> slow_near(double vbl) {
+  return [vbl](double v) { return 1.0 + 4.0 * std::exp(-std::abs(v - vbl) / (0.1 * vbl)); };
+}
+
+struct Law {
+  double a, p, vbl;
+};
+const std::vector<Law> kLaws{{0.9, 2.0, 12.3}, {0.9, 2.0, 70.4}, {0.75, 2.6, 77.9}, {1.0, 1.6, 99.99},
+                             {0.85, 2.2, 100.0}, {0.8, 3.0, 433.3}, {0.95, 2.0, 61.0}};
+
+LimitOptions only(bool ksection, bool cancel, bool guess, bool two_sided, bool reuse, int jobs) {
+  LimitOptions o;
+  o.jobs = jobs;
+  o.rules.ksection = ksection;
+  o.rules.cancel_moot = cancel;
+  o.rules.residual_guess = guess;
+  o.rules.two_sided_start = two_sided;
+  o.rules.reuse_fit_points = reuse;
+  return o;
+}
+
+// The fast answer is a verified bracket within the tolerance, within tolerance / 2 of the
+// true limit and within the tolerance of the reference's.
+void expect_same_answer(const LimitResult& f, const LimitResult& ref, double vbl, double tol) {
+  ASSERT_TRUE(f.bracketed);
+  EXPECT_TRUE(f.converged);
+  EXPECT_LE(f.hi_mps - f.lo_mps, tol);
+  EXPECT_LT(f.lo_mps, vbl);
+  EXPECT_GE(f.hi_mps, vbl);
+  EXPECT_NEAR(f.ballistic_limit_mps, vbl, tol / 2 + 1e-9);
+  EXPECT_NEAR(f.ballistic_limit_mps, ref.ballistic_limit_mps, tol + 1e-9);
+  EXPECT_LE(std::abs(f.ballistic_limit_mps - vbl), f.error_mps + 1e-9);
+  bool saw_lo = false, saw_hi = false;
+  for (const auto& s : f.runs) {
+    if (s.cancelled) {
+      EXPECT_FALSE(s.decided);
+      EXPECT_NE(s.velocity_mps, f.lo_mps);
+      EXPECT_NE(s.velocity_mps, f.hi_mps);
+      continue;
+    }
+    EXPECT_EQ(s.perforated, s.velocity_mps >= vbl) << s.velocity_mps;
+    saw_lo |= s.velocity_mps == f.lo_mps && !s.perforated;
+    saw_hi |= s.velocity_mps == f.hi_mps && s.perforated;
+  }
+  EXPECT_TRUE(saw_lo && saw_hi) << "the bracket's ends must be full runs";
+  EXPECT_TRUE(f.warnings.empty()) << f.warnings.front();
+  EXPECT_EQ(f.method, "fast");
+}
+
+// Rule ksection: two runs in flight, the bracket cut in thirds (then the part most likely
+// to hold the limit split as a slot frees). Fewer rounds than bisection, same answer.
+TEST(FastLimit, KsectionMatchesTheReferenceInFewerRounds) {
+  for (const Law& law : kLaws)
+    for (double tol : {1.0, 0.25}) {
+      SCOPED_TRACE("vbl " + std::to_string(law.vbl) + " tol " + std::to_string(tol));
+      LimitOptions ro;
+      ro.tolerance_mps = tol;
+      const auto ref = find_ballistic_limit(target(law.a, law.p, law.vbl), ro, false);
+      auto o = only(true, false, false, false, false, 2);
+      o.tolerance_mps = tol;
+      const auto f = simulate_fast_search(target(law.a, law.p, law.vbl), o, false);
+      expect_same_answer(f, ref, law.vbl, tol);
+      EXPECT_LT(f.rounds, ref.rounds);
+      EXPECT_EQ(f.runs_cancelled, 0);  // cancel_moot off: every run to its end
+      EXPECT_EQ(f.rules, std::vector<std::string>{"ksection"});
+    }
+}
+
+// Rule cancel_moot: a run a sibling made moot is stopped at once; the search ends sooner on
+// the clock, with the same bracket, and every stopped run is listed as cancelled.
+TEST(FastLimit, CancelMootStopsMootRunsAndEndsSooner) {
+  double with_s = 0, without_s = 0;
+  int cancelled = 0;
+  for (const Law& law : kLaws) {
+    SCOPED_TRACE("vbl " + std::to_string(law.vbl));
+    const auto t = target(law.a, law.p, law.vbl, slow_near(law.vbl));
+    const auto ref = find_ballistic_limit(t, LimitOptions{}, false);
+    const auto a = simulate_fast_search(t, only(true, true, false, false, false, 2), false);
+    const auto b = simulate_fast_search(t, only(true, false, false, false, false, 2), false);
+    expect_same_answer(a, ref, law.vbl, 1.0);
+    expect_same_answer(b, ref, law.vbl, 1.0);
+    EXPECT_LE(a.wall_time_s, b.wall_time_s + 1e-9);
+    with_s += a.wall_time_s;
+    without_s += b.wall_time_s;
+    cancelled += a.runs_cancelled;
+    int listed = 0;
+    for (const auto& s : a.runs) {
+      listed += s.cancelled;
+      if (s.cancelled) {
+        EXPECT_EQ(s.cancel_reason.rfind("moot: ", 0), 0u) << s.cancel_reason;
+      }
+    }
+    EXPECT_EQ(listed, a.runs_cancelled);
+  }
+  EXPECT_GT(cancelled, 0);
+  EXPECT_LT(with_s, without_s);
+}
+
+// Rule residual_guess: Lambert-Jonas p = 2 through the residual velocities places the next
+// points. One run at a time (jobs 1) it needs fewer runs than bisection, also for targets
+// whose p is not 2; with two in flight (where the k-section already does most of the work) it
+// costs at most a round more on any target.
+TEST(FastLimit, ResidualGuessNeedsFewerRuns) {
+  int guess_rounds = 0, plain_rounds = 0, guess_runs = 0, ref_runs = 0;
+  for (const Law& law : kLaws)
+    for (double tol : {1.0, 0.25}) {
+      SCOPED_TRACE("vbl " + std::to_string(law.vbl) + " p " + std::to_string(law.p) + " tol " + std::to_string(tol));
+      LimitOptions ro;
+      ro.tolerance_mps = tol;
+      const auto t = target(law.a, law.p, law.vbl);
+      const auto ref = find_ballistic_limit(t, ro, false);
+      auto one = only(false, true, true, false, false, 1);
+      one.tolerance_mps = tol;
+      const auto f1 = simulate_fast_search(t, one, false);
+      expect_same_answer(f1, ref, law.vbl, tol);
+      EXPECT_LE(f1.runs.size(), ref.runs.size());  // a run at the limit itself has Vr = 0: no guess
+      guess_runs += int(f1.runs.size());
+      ref_runs += int(ref.runs.size());
+      auto two = only(true, true, true, false, false, 2), plain = only(true, true, false, false, false, 2);
+      two.tolerance_mps = plain.tolerance_mps = tol;
+      const auto f2 = simulate_fast_search(t, two, false);
+      const auto p2 = simulate_fast_search(t, plain, false);
+      expect_same_answer(f2, ref, law.vbl, tol);
+      EXPECT_LE(f2.rounds, p2.rounds + 1);
+      guess_rounds += f2.rounds;
+      plain_rounds += p2.rounds;
+    }
+  EXPECT_LE(guess_rounds, plain_rounds + 3);
+  EXPECT_LT(guess_runs, ref_runs * 0.85);
+}
+
+// Rule two_sided_start: the first round tries the start and one growth step below it: a
+// limit below the start is bracketed a round sooner.
+TEST(FastLimit, TwoSidedStartBracketsSooner) {
+  for (const Law& law : {Law{0.9, 2.0, 70.4}, Law{0.75, 2.6, 77.9}, Law{0.9, 2.0, 85.0}}) {
+    const auto t = target(law.a, law.p, law.vbl);
+    const auto ref = find_ballistic_limit(t, LimitOptions{}, false);
+    const auto on = simulate_fast_search(t, only(true, true, false, true, false, 2), false);
+    const auto off = simulate_fast_search(t, only(true, true, false, false, false, 2), false);
+    expect_same_answer(on, ref, law.vbl, 1.0);
+    EXPECT_LT(on.rounds, off.rounds) << law.vbl;
+  }
+}
+
+// Rule reuse_fit_points: the perforating runs the search made stand for fit runs near them,
+// so fewer fit runs are added than the reference's four; the fit still recovers the law.
+TEST(FastLimit, FitRunsOnlyWhereTheFitLacksAPoint) {
+  for (const Law& law : {Law{0.9, 2.0, 70.4}, Law{0.8, 2.4, 73.3}, Law{0.75, 2.6, 77.9}}) {
+    SCOPED_TRACE("vbl " + std::to_string(law.vbl));
+    LimitOptions ro;
+    ro.tolerance_mps = 0.5;
+    const auto t = target(law.a, law.p, law.vbl);
+    const auto ref = find_ballistic_limit(t, ro, true);
+    auto o = only(true, true, true, true, true, 2);
+    o.tolerance_mps = 0.5;
+    const auto f = simulate_fast_search(t, o, true);
+    expect_same_answer(f, ref, law.vbl, 0.5);
+    int ref_fit = 0, fast_fit = 0;
+    for (const auto& s : ref.runs) ref_fit += s.purpose == "fit";
+    for (const auto& s : f.runs) fast_fit += s.purpose == "fit" && !s.cancelled;
+    EXPECT_EQ(ref_fit, 4);
+    EXPECT_LE(fast_fit, 4);
+    ASSERT_TRUE(f.fit.ok) << f.fit.note;
+    EXPECT_NEAR(f.fit.vbl_mps, law.vbl, 0.5);
+    EXPECT_NEAR(f.fit.a, law.a, 0.02);
+    EXPECT_NEAR(f.fit.p, law.p, 0.1);
+    EXPECT_LT(f.rounds, ref.rounds);
+    // The fit's velocities are covered: within 10 % of each BL x factor there is a perforating run.
+    for (double k : o.fit_factors) {
+      bool covered = false;
+      for (const auto& s : f.runs)
+        covered |= !s.cancelled && s.perforated && std::abs(s.velocity_mps / (k * f.ballistic_limit_mps) - 1) <= 0.1;
+      EXPECT_TRUE(covered) << k;
+    }
+  }
+}
+
+// Every rule at once (the default of `ravel limit`): same answers, far fewer rounds.
+TEST(FastLimit, AllRulesMatchTheReference) {
+  for (const Law& law : kLaws) {
+    SCOPED_TRACE("vbl " + std::to_string(law.vbl));
+    const auto t = target(law.a, law.p, law.vbl, slow_near(law.vbl));
+    const auto ref = find_ballistic_limit(t, LimitOptions{}, true);
+    LimitOptions o;
+    o.jobs = 2;
+    const auto f = simulate_fast_search(t, o, true);
+    expect_same_answer(f, ref, law.vbl, 1.0);
+    EXPECT_LT(f.rounds, ref.rounds);
+    double ref_time = 0;
+    for (const auto& s : ref.runs) ref_time += s.wall_time_s;
+    EXPECT_LT(f.wall_time_s, 0.65 * ref_time);
+  }
+}
+
+// Undecided runs are left out of the bracket (as the reference does), and a failed run
+// stops the search.
+TEST(FastLimit, UndecidedRunsAreLeftOutAndAFailedRunStops) {
+  const double vbl = 70.4, band = 3;
+  auto t = [&](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= vbl;
+    s.decided = s.perforated || v < vbl - band;
+    s.end_reason = s.perforated ? "perforated" : s.decided ? "rebounded" : "end_time";
+    s.residual_velocity_mps = s.perforated ? 0.9 * std::sqrt(v * v - vbl * vbl) : 0;
+    return s;
+  };
+  LimitOptions o;
+  o.jobs = 2;
+  const auto r = simulate_fast_search(t, o, false);
+  ASSERT_TRUE(r.bracketed);
+  EXPECT_LT(r.lo_mps, vbl - band);
+  EXPECT_GE(r.hi_mps, vbl);
+  EXPECT_LE(r.hi_mps - r.lo_mps, band + o.tolerance_mps);
+  int warned = 0;
+  for (const auto& w : r.warnings) warned += w.find("undecided") != std::string::npos;
+  EXPECT_GT(warned, 0);
+
+  auto diverging = [](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= 70;
+    s.failed = v < 80 && v > 60;
+    s.error = "diverged";
+    return s;
+  };
+  const auto d = simulate_fast_search(diverging, o, true);
+  EXPECT_FALSE(d.converged);
+  bool any_failed = false;
+  for (const auto& s : d.runs) any_failed |= s.failed;
+  EXPECT_TRUE(any_failed);
+  EXPECT_FALSE(d.warnings.empty());
+}
+
+// On real threads: each run sleeps in small steps, watching its stop flag. The answer is
+// the virtual clock's, moot runs come back cancelled, and the hooks see every run.
+RunFn sleepy(double vbl, double ms_per_run) {
+  const ShootFn t = target(0.9, 2.0, vbl);
+  return [=](double v, const std::string& why, const std::atomic<bool>* stop) {
+    const int steps = int(ms_per_run);
+    for (int i = 0; i < steps; ++i) {
+      if (stop && stop->load()) {
+        Shot c;
+        c.cancelled = true;
+        c.decided = false;
+        return c;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return t(v, why);
+  };
+}
+
+TEST(FastLimit, ThreadsFindTheSameLimitAndHooksSeeEveryRun) {
+  LimitOptions o;
+  o.jobs = 2;
+  int started = 0, ended = 0;
+  LimitHooks h;
+  std::vector<std::string> lines;
+  h.on_start = [&](const Shot&) { ++started; };
+  h.on_finish = [&](const Shot&, const LimitProgress& p) {
+    ++ended;
+    lines.push_back(p.line());
+  };
+  const auto r = find_ballistic_limit_fast(sleepy(70.4, 20), o, true, nullptr, h);
+  ASSERT_TRUE(r.converged);
+  EXPECT_NEAR(r.ballistic_limit_mps, 70.4, 0.5 + 1e-9);
+  EXPECT_EQ(started, int(r.runs.size()));
+  EXPECT_EQ(ended, int(r.runs.size()));
+  EXPECT_EQ(r.jobs, 2);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find("bracket "), std::string::npos) << lines.back();
+  for (const auto& s : r.runs) {
+    EXPECT_GE(s.started_s, 0);
+    EXPECT_GE(s.ended_s, s.started_s);
+  }
+}
+
+// An interruption stops every run in flight: they are listed as cancelled ("interrupted"),
+// the result says interrupted; the finished runs given back as `prior` resume the search.
+TEST(FastLimit, InterruptStopsEveryRunAndPriorRunsResume) {
+  std::atomic<bool> interrupt{false};
+  LimitOptions o;
+  o.jobs = 2;
+  LimitHooks h;
+  int ended = 0;
+  h.on_finish = [&](const Shot&, const LimitProgress&) {
+    if (++ended == 3) interrupt = true;
+  };
+  const auto part = find_ballistic_limit_fast(sleepy(70.4, 30), o, false, &interrupt, h);
+  EXPECT_TRUE(part.interrupted);
+  bool saw_interrupted = false;
+  std::vector<Shot> kept;
+  for (const auto& s : part.runs) {
+    if (s.cancelled) saw_interrupted |= s.cancel_reason == "interrupted";
+    else kept.push_back(s);
+  }
+  EXPECT_TRUE(saw_interrupted);
+  ASSERT_GE(kept.size(), 2u);
+  int made = 0;
+  LimitHooks count;
+  count.on_start = [&](const Shot&) { ++made; };
+  const auto full = find_ballistic_limit_fast(sleepy(70.4, 5), o, false, nullptr, count, kept);
+  ASSERT_TRUE(full.converged);
+  EXPECT_NEAR(full.ballistic_limit_mps, 70.4, 0.5 + 1e-9);
+  EXPECT_EQ(int(full.runs.size()), int(kept.size()) + made);
+  int resumed = 0;
+  for (const auto& s : full.runs) resumed += s.resumed;
+  EXPECT_EQ(resumed, int(kept.size()));
+}
+
+// The real thing: the cheap scene, two runs in flight on one thread each, against the
+// reference search at the same settings.
+TEST(FastLimit, CheapSceneMatchesTheReference) {
+  auto ov = testing::cheap_scene();
+  ov.push_back("solver.threads=1");
+  LimitOptions o;
+  o.start_mps = 50;
+  o.tolerance_mps = 1.0;
+  const auto ref = find_ballistic_limit(scene_shooter("", ov), o, false);
+  ASSERT_TRUE(ref.converged);
+  o.jobs = 2;
+  const auto f = find_ballistic_limit_fast(scene_runner("", ov), o, false);
+  for (const auto& w : f.warnings) ADD_FAILURE() << w;
+  ASSERT_TRUE(f.converged);
+  EXPECT_LE(f.hi_mps - f.lo_mps, 1.0);
+  EXPECT_NEAR(f.ballistic_limit_mps, ref.ballistic_limit_mps, 1.0);
+  // Both brackets hold the limit: they overlap.
+  EXPECT_LT(std::max(f.lo_mps, ref.lo_mps), std::min(f.hi_mps, ref.hi_mps));
+  EXPECT_LT(f.rounds, ref.rounds);
+}
+
+}  // namespace
+}  // namespace ravel::studies
