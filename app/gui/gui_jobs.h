@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -45,13 +46,16 @@ class LimitRunner {
  public:
   struct Snapshot {
     bool running = false, finished = false;
-    std::vector<studies::Shot> runs;  // every run so far, in order
-    studies::LimitResult result;      // valid when finished
+    std::vector<studies::Shot> runs;       // every run so far, in the order they ended
+    std::vector<studies::Shot> in_flight;  // runs going now (velocity, purpose, started_s)
+    studies::LimitProgress progress;       // the bracket, guess and ETA after the last run
+    studies::LimitResult result;           // valid when finished
     std::string error, out_dir;
+    std::chrono::steady_clock::time_point started;
   };
   ~LimitRunner();
   bool start(const std::string& scene_path, const std::vector<std::string>& overrides, const std::string& out_dir,
-             double tolerance_mps, std::string* error);
+             double tolerance_mps, int jobs, std::string* error);
   void cancel();
   bool running() const;
   Snapshot snapshot() const;
@@ -75,6 +79,7 @@ struct StudiesWindow {
   // Ballistic limit.
   char limit_dir[512] = "";
   double tolerance_mps = 2;
+  int limit_jobs = int(std::max(1u, std::thread::hardware_concurrency()));  // runs in flight (`ravel limit --jobs`)
   std::string limit_error;
   LimitRunner limit;
 };

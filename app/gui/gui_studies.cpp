@@ -25,7 +25,7 @@ LimitRunner::~LimitRunner() {
 }
 
 bool LimitRunner::start(const std::string& scene_path, const std::vector<std::string>& overrides,
-                        const std::string& out_dir, double tolerance_mps, std::string* error) {
+                        const std::string& out_dir, double tolerance_mps, int jobs, std::string* error) {
   if (running()) {
     *error = "a search is running";
     return false;
@@ -44,28 +44,47 @@ bool LimitRunner::start(const std::string& scene_path, const std::vector<std::st
     state_ = Snapshot{};
     state_.running = true;
     state_.out_dir = out_dir;
+    state_.started = std::chrono::steady_clock::now();
   }
-  thread_ = std::thread([this, scene_path, overrides, out_dir, tolerance_mps] {
+  thread_ = std::thread([this, scene_path, overrides, out_dir, tolerance_mps, jobs] {
+    // The same search as `ravel limit` with no flags: the fast search, `jobs` runs in
+    // flight, one solver thread each, runs kept in out_dir/runs/ (a cancelled search
+    // resumes from them).
     studies::LimitOptions opt;
     opt.tolerance_mps = tolerance_mps;
     opt.start_mps = 100;
+    opt.jobs = std::max(1, jobs);
     std::vector<std::string> ov = overrides;
     ov.push_back("solver.end_time_us=auto");
+    ov.push_back("solver.threads=1");
     try {
-      studies::ShootFn inner = studies::scene_shooter(scene_path, ov, &interrupt_, {}, out_dir);
-      studies::ShootFn shoot = [&](double v, const std::string& why) {
-        studies::Shot s = inner(v, why);
-        s.velocity_mps = v;
-        s.purpose = why;
+      const std::vector<studies::Shot> prior = studies::kept_runs(scene_path, ov, out_dir);
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        state_.runs = prior;
+      }
+      studies::LimitHooks hooks;
+      hooks.on_start = [&](const studies::Shot& s) {
+        std::lock_guard<std::mutex> lock(mu_);
+        state_.in_flight.push_back(s);
+      };
+      hooks.on_finish = [&](const studies::Shot& s, const studies::LimitProgress& p) {
         std::lock_guard<std::mutex> lock(mu_);
         state_.runs.push_back(s);
-        return s;
+        state_.progress = p;
+        state_.in_flight = p.in_flight;
       };
-      studies::LimitResult r = studies::find_ballistic_limit(shoot, opt, true);
+      studies::LimitResult r = studies::find_ballistic_limit_fast(
+          studies::scene_runner(scene_path, ov, {}, out_dir), opt, true, &interrupt_, hooks, prior);
       write_file_atomic(out_dir + "/limit.json", studies::limit_json(r, opt, scene_path, ov));
       std::lock_guard<std::mutex> lock(mu_);
-      state_.result = r;
-      state_.finished = true;
+      state_.in_flight.clear();
+      if (r.interrupted) {
+        state_.error = "cancelled; the runs that finished are kept in " + out_dir + "/runs (start again to resume)";
+      } else {
+        state_.result = r;
+        state_.finished = true;
+      }
     } catch (const std::exception& e) {
       std::lock_guard<std::mutex> lock(mu_);
       state_.error = interrupt_ ? "cancelled; the runs that finished are kept in " + out_dir + "/runs" : e.what();
@@ -140,7 +159,7 @@ bool start_limit(GuiApp& app) {
   try {
     const std::string scene = write_scene(app, std::string(w.limit_dir) + "/.scene");
     w.limit_error.clear();
-    if (!w.limit.start(scene, {}, w.limit_dir, w.tolerance_mps, &w.limit_error)) return false;
+    if (!w.limit.start(scene, {}, w.limit_dir, w.tolerance_mps, w.limit_jobs, &w.limit_error)) return false;
     app.notice = std::string("ballistic-limit search started into ") + w.limit_dir;
     app.notice_is_error = false;
     return true;
@@ -223,14 +242,17 @@ void limit_window(GuiApp& app) {
   if (!*w.limit_dir) std::snprintf(w.limit_dir, sizeof w.limit_dir, "%s", default_dir(app, "limit").c_str());
   const LimitRunner::Snapshot s = w.limit.snapshot();
   ImGui::TextWrapped(
-      "The lowest impact velocity that perforates the scene in the panels, by bracketing and bisection, as `ravel "
-      "limit` finds it (runs extended until they decide). Runs near the limit last 0.5-5 ms of simulated time: a "
-      "search takes minutes.");
+      "The lowest impact velocity that perforates the scene in the panels, found as `ravel limit` finds it: the fast "
+      "search, several runs in flight (one solver thread each), runs stopped once their outcome cannot move the "
+      "bracket, the next velocities placed from the residual velocities measured. `ravel limit --reference` is the "
+      "plain bisection to check it against.");
   ImGui::BeginDisabled(s.running);
   ImGui::InputText("folder", w.limit_dir, sizeof w.limit_dir);
   ImGui::SetNextItemWidth(fs * 8);
   ImGui::InputDouble("tolerance (m/s)", &w.tolerance_mps, 0, 0, "%.2f");
   w.tolerance_mps = std::clamp(w.tolerance_mps, 0.05, 50.0);
+  ImGui::SetNextItemWidth(fs * 8);
+  ImGui::SliderInt("runs in flight", &w.limit_jobs, 1, int(std::max(1u, std::thread::hardware_concurrency())));
   if (ImGui::Button("Start search")) start_limit(app);
   ImGui::EndDisabled();
   if (s.running) {
@@ -243,16 +265,31 @@ void limit_window(GuiApp& app) {
   ImGui::PopTextWrapPos();
   if (s.finished) {
     if (s.result.bracketed)
-      ImGui::Text("ballistic limit %.1f m/s (bracket %.2f - %.2f)%s", s.result.ballistic_limit_mps, s.result.lo_mps,
-                  s.result.hi_mps, s.result.converged ? "" : ", not converged");
+      ImGui::Text("ballistic limit %.1f m/s (bracket %.2f - %.2f, +-%.2f m/s)%s", s.result.ballistic_limit_mps,
+                  s.result.lo_mps, s.result.hi_mps, s.result.error_mps, s.result.converged ? "" : ", not converged");
     else
       ImGui::TextColored(kBad, "no bracket: %s", s.result.warnings.empty() ? "" : s.result.warnings[0].c_str());
+    ImGui::TextDisabled("%s search, %d runs in flight, %d rounds, %d moot runs stopped, %.0f s", s.result.method.c_str(),
+                        s.result.jobs, s.result.rounds, s.result.runs_cancelled, s.result.wall_time_s);
     if (s.result.fit.ok)
       ImGui::TextDisabled("Lambert-Jonas fit: %.1f m/s (a %.2f, p %.2f)", s.result.fit.vbl_mps, s.result.fit.a,
                           s.result.fit.p);
     ImGui::TextDisabled("%s/limit.json", s.out_dir.c_str());
   } else if (s.running) {
-    ImGui::Text("run %zu ...", s.runs.size() + 1);
+    const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.started).count();
+    // The bracket, the guess and the time left as of the last run that ended.
+    if (s.progress.finished + s.progress.cancelled > 0)
+      ImGui::TextWrapped("%s", s.progress.line().c_str());
+    else
+      ImGui::Text("bracketing: first runs going");
+    if (s.progress.eta_s >= 0) {  // the ETA counts down from the last run that ended
+      const double left = std::max(0.0, s.progress.eta_s - (el - s.progress.elapsed_s));
+      ImGui::Text("%.0f s elapsed; about %.0f s left", el, left);
+    } else {
+      ImGui::Text("%.0f s elapsed", el);
+    }
+    for (const auto& f : s.in_flight)
+      ImGui::TextDisabled("  running %.2f m/s (%s)", f.velocity_mps, f.purpose.c_str());
   }
   if (ImGui::BeginTable("runs", 4, ImGuiTableFlags_RowBg | ImGuiTableFlags_ScrollY,
                         ImVec2(0, std::max(fs * 6, ImGui::GetContentRegionAvail().y)))) {
@@ -267,6 +304,7 @@ void limit_window(GuiApp& app) {
       ImGui::Text("%.2f", r.velocity_mps);
       ImGui::TableNextColumn();
       ImGui::TextUnformatted(r.failed       ? "failed"
+                             : r.cancelled  ? ("stopped: " + r.cancel_reason).c_str()
                              : r.perforated ? "perforated"
                              : r.decided    ? r.end_reason.c_str()
                                             : "undecided");
