@@ -100,6 +100,47 @@ TEST(Friction, WorkWindowsAreTheLedgerAtFirstBreakAndPerforation) {
   }
 }
 
+// The end of the event on the paper's own scene (issue 37, docs/MODEL.md §10 "After the
+// first break"; default scene, full mesh, 260 m/s). The clamped wefts break first, near the
+// impact point, not at the clamps; what follows is the free warps under the projectile
+// pulled through the weave, so at mu = 0.2 most of the friction work comes after the first
+// break (measured: 3.68 J by it at 87.0 us, 31.02 J by perforation at 186.4 us). At mu = 1.0
+// the weave sticks, nothing is pulled through, and the projectile perforates earlier with a
+// fraction of the friction (0.87 J by the first break, 4.56 J by perforation at 112.8 us).
+// The bounds are the mechanism's (pull-out carries at least 5x the friction before the
+// break; sticking cuts it to under a quarter), not the measured values: the run after the
+// first break is chaotic (§10) and moves these figures by several per cent between builds.
+TEST(EndOfEvent, FreeWarpsPulledThroughCarryTheFrictionAfterTheFirstBreak) {
+  auto run = [](const char* mu) {
+    Simulation sim(test::scene_with({mu, "solver.threads=2"}));
+    sim.run();
+    return sim.summary();
+  };
+  const Summary low = run("yarn.friction=0.2"), high = run("yarn.friction=1.0");
+  for (const Summary* s : {&low, &high}) {
+    ASSERT_TRUE(s->perforated) << s->diagnosis;
+    ASSERT_GT(s->first_break_time_s, 0.0);
+    EXPECT_LT(s->energy_balance_error, 0.02);
+  }
+  // Where the first break is and where the elements broken before perforation lie, at
+  // mu = 0.2: within 8 mm of the impact point, at most a quarter by a clamp (measured: 2.6 mm;
+  // 6 of 110 by a clamp).
+  EXPECT_LT(low.first_break_distance_m, 8e-3);
+  ASSERT_GT(low.broken_before_perforation, 0);
+  EXPECT_LE(4 * low.broken_near_clamp, low.broken_before_perforation)
+      << low.broken_near_clamp << " of " << low.broken_before_perforation << " by a clamp";
+  // Friction work before the break: a few J at mu = 0.2 (the whole deflected ply slides), less
+  // at mu = 1.0 (the weave sticks).
+  EXPECT_GT(low.friction_work_to_first_break_J, 1.0);
+  EXPECT_LT(low.friction_work_to_first_break_J, 8.0);
+  EXPECT_LT(high.friction_work_to_first_break_J, low.friction_work_to_first_break_J);
+  // After it: pull-out at mu = 0.2, none at mu = 1.0.
+  EXPECT_GT(low.friction_work_to_perforation_J, 5 * low.friction_work_to_first_break_J);
+  EXPECT_LT(high.friction_work_to_perforation_J, 0.25 * low.friction_work_to_perforation_J);
+  // Paper Fig. 14: mu = 1.0 perforates earlier than mu = 0.2.
+  EXPECT_LT(high.perforation_time_s, low.perforation_time_s);
+}
+
 // The map of where friction heats the yarns (Solver::crossing_friction_heat; the app's and
 // the snapshots' "friction" field, the VTK files' friction_heat_J_per_g): each crossing's
 // friction force times its slip speed, summed over the steps. None without friction, never
