@@ -252,7 +252,8 @@ void limit_window(GuiApp& app) {
   ImGui::InputDouble("tolerance (m/s)", &w.tolerance_mps, 0, 0, "%.2f");
   w.tolerance_mps = std::clamp(w.tolerance_mps, 0.05, 50.0);
   ImGui::SetNextItemWidth(fs * 8);
-  ImGui::SliderInt("runs in flight", &w.limit_jobs, 1, int(std::max(1u, std::thread::hardware_concurrency())));
+  ImGui::InputInt("runs in flight", &w.limit_jobs);
+  w.limit_jobs = std::clamp(w.limit_jobs, 1, 64);
   if (ImGui::Button("Start search")) start_limit(app);
   ImGui::EndDisabled();
   if (s.running) {
