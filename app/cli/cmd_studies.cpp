@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "chart.h"
@@ -282,6 +283,21 @@ int cmd_limit(const Args& args) {
     lo.start_mps = parse_positive(a, "start", 100.0);
     lo.max_runs = int(parse_positive(a, "max-runs", 60));
     lo.jobs = reference ? 1 : jobs_from(a);
+    if (auto it = a.flags.find("without"); it != a.flags.end()) {
+      if (reference) throw UsageError("--without: the reference search has no rules to leave out");
+      std::stringstream ss(it->second);
+      for (std::string rule; std::getline(ss, rule, ',');) {
+        if (rule == "ksection") lo.rules.ksection = false;
+        else if (rule == "cancel_moot") lo.rules.cancel_moot = false;
+        else if (rule == "residual_guess") lo.rules.residual_guess = false;
+        else if (rule == "two_sided_start") lo.rules.two_sided_start = false;
+        else if (rule == "reuse_fit_points") lo.rules.reuse_fit_points = false;
+        else
+          throw UsageError("--without: unknown rule '" + rule +
+                           "' (the fast search's rules: ksection, cancel_moot, residual_guess, two_sided_start, "
+                           "reuse_fit_points)");
+      }
+    }
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     const bool verbose = progress_wanted(a);

@@ -103,6 +103,9 @@ std::vector<Command> make_table() {
                 {"reference", nullptr, false,
                  "the reference search: bisection, one run at a time, every run to its end (docs/studies.md); "
                  "default: the fast search, the same bracket guarantee"},
+                {"without", "RULE,...", false,
+                 "the fast search without these of its rules (ksection, cancel_moot, residual_guess, "
+                 "two_sided_start, reuse_fit_points; docs/studies.md), to measure what each saves"},
                 kQuiet}});
   t.push_back({"paper",
                "ravel paper --out DIR [options]",

@@ -114,4 +114,17 @@ for r in j["runs"]:
     assert (v >= hi) if r["perforated"] else (v <= lo), r
 PY
 
+# --without leaves rules out (and says so in limit.json); an unknown rule is refused by name.
+"$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --jobs 2 --without residual_guess,cancel_moot \
+  --out "$WORK/limit_without" >"$WORK/limit_without.out" 2>&1 || fail "limit --without: $(cat "$WORK/limit_without.out")"
+/usr/bin/python3 - "$WORK/limit_without/limit.json" <<'PY' || fail "limit --without: limit.json rules"
+import json, sys
+j = json.load(open(sys.argv[1]))
+names = [r["name"] for r in j["rules"]]
+assert "residual_guess" not in names and "cancel_moot" not in names and "ksection" in names, names
+assert j["runs_cancelled"] == 0, j["runs_cancelled"]
+PY
+out=$("$RAVEL" limit "${CHEAP[@]}" --without guess --out "$WORK/limit_bad" 2>&1)
+[[ $? == 2 ]] && grep -q "unknown rule 'guess'" <<<"$out" || fail "limit --without guess: $out"
+
 if [[ $fails == 0 ]]; then echo "studies CLI: all passed"; else echo "studies CLI: $fails failed"; exit 1; fi
