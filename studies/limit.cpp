@@ -560,6 +560,10 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   j["start_mps"] = opt.start_mps;
   j["growth"] = opt.growth;
   j["growth_accel"] = opt.growth_accel;
+  if (r.method == "fast") {
+    j["probe_step"] = opt.probe_step;
+    j["probe_count"] = opt.probe_count;
+  }
   j["method"] = r.method;
   j["method_note"] = r.method == "fast"
                          ? "ravel limit (fast search): runs in flight at once, each run stopped once moot; the bracket's "
@@ -575,7 +579,9 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
         {"residual_guess", "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the "
                            "next points (75 % of a prior, 25 % uniform)"},
         {"two_sided_start", "the first round tries start_mps and start_mps / growth at once"},
-        {"reuse_fit_points", "fit runs only where no perforating run is within fit_reuse_window of BL x factor"}};
+        {"reuse_fit_points", "fit runs only where no perforating run is within fit_reuse_window of BL x factor"},
+        {"probe_below", "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below "
+                        "the bracket moves it down (the limit is the lowest velocity that perforates)"}};
     nlohmann::ordered_json rules = nlohmann::ordered_json::array();
     for (const auto& name : r.rules) {
       nlohmann::ordered_json q;

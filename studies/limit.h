@@ -67,6 +67,13 @@ struct FastRules {
   // The fit's runs only where no perforating run of the search is already within 10 % of the
   // fit's velocity (BL x factor); a bracket run made moot that would be such a point is kept.
   bool reuse_fit_points = true;
+  // Once the bracket reaches the tolerance, runs at hi x (1 - k probe_step), k = 1 ..
+  // probe_count, below it. The limit is the lowest velocity that perforates (SPEC §8), and
+  // near it outcomes need not be monotone (at mu = 1.0 on the default scene 80 and 85 m/s
+  // perforate, 90-100.8 m/s stop, 101.6 m/s perforates): a bracket of two runs cannot see a
+  // perforation below it. A probe that perforates moves the bracket down to it and the
+  // search goes on there; the answer stands once every probe below it stopped.
+  bool probe_below = true;
 };
 struct LimitOptions {
   double start_mps = 100;  // first velocity tried
@@ -83,6 +90,8 @@ struct LimitOptions {
   int jobs = 1;
   FastRules rules;
   double fit_reuse_window = 0.10;  // a run within this fraction of BL x factor stands for that fit run
+  double probe_step = 0.05;        // FastRules::probe_below: probes at hi x (1 - k probe_step) ...
+  int probe_count = 4;             // ... k = 1 .. probe_count (down to 80 % of hi)
 };
 
 struct LambertJonas {

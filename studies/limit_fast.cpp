@@ -207,6 +207,7 @@ class Engine {
     if (r.residual_guess) res_.rules.push_back("residual_guess");
     if (r.two_sided_start && jobs_ > 1) res_.rules.push_back("two_sided_start");
     if (r.reuse_fit_points && with_fit) res_.rules.push_back("reuse_fit_points");
+    if (r.probe_below && opt.probe_count > 0) res_.rules.push_back("probe_below");
     res_.method = "fast";
     res_.jobs = jobs_;
     fit_done_.assign(opt.fit_factors.size(), false);
@@ -459,6 +460,11 @@ class Engine {
       }
       if (int(out.size()) >= free) return out;
     }
+    // Once converged: the probes below the bracket (FastRules::probe_below), long runs first.
+    for (const double v : missing_probes()) {
+      if (int(out.size()) >= free) return out;
+      if (!planned(out, v, probe_near(v))) out.push_back({v, "probe"});
+    }
     // Slots the bracket has no use for: the fit's runs.
     if (fit_wanted() && (converged() || opt_.rules.reuse_fit_points)) {
       cover_fit_points();
@@ -472,6 +478,19 @@ class Engine {
         for (const auto& p : out) dup |= p.fit_index == int(i);
         if (!dup) out.push_back({v, "fit", int(i)});
       }
+    }
+    return out;
+  }
+  // The probes below a converged bracket still to make: none in flight or made within
+  // probe_near of each (a run there, of any purpose, stands for it).
+  static double probe_near(double v) { return 0.01 * v; }
+  std::vector<double> missing_probes() const {
+    std::vector<double> out;
+    if (!opt_.rules.probe_below || !converged() || failed_) return out;
+    for (int k = 1; k <= opt_.probe_count; ++k) {
+      const double v = hi_ * (1 - k * opt_.probe_step);
+      if (v < opt_.min_mps || v >= lo_) continue;
+      if (!in_use(v, probe_near(v))) out.push_back(v);
     }
     return out;
   }
@@ -561,8 +580,10 @@ class Engine {
   void cancel_moot(const Shot& because) {
     for (auto& f : flying_) {
       if (f.purpose == "fit") continue;
-      const bool above = hi_ > 0 && f.v >= hi_, below = lo_ > 0 && f.v <= lo_;
-      if (!above && !below && !converged()) continue;
+      // A probe is below the bracket by design: moot only once a perforation below it is known.
+      const bool probe = f.purpose == "probe";
+      const bool above = hi_ > 0 && f.v >= hi_, below = !probe && lo_ > 0 && f.v <= lo_;
+      if (!above && !below && (probe || !converged())) continue;
       if (above && with_fit_) {
         const int slot = fit_slot(f.v);
         if (slot >= 0) {
@@ -608,7 +629,14 @@ class Engine {
       int fit_flights = 0;
       for (const auto& f : flying_) fit_flights += f.purpose == "fit";
       fits = std::max(0, fits - fit_flights);
-      rounds += (fits + jobs_ - 1) / jobs_;
+      int probes = 0;
+      if (opt_.rules.probe_below) {
+        probes = opt_.probe_count;
+        for (const auto& f : flying_) probes -= f.purpose == "probe";
+        for (const auto& s : res_.runs) probes -= s.purpose == "probe" && !s.cancelled;
+        probes = std::max(0, probes);
+      }
+      rounds += (fits + probes + jobs_ - 1) / jobs_;
       double eta = rounds * mean;
       double oldest = 0;
       for (const auto& f : flying_) oldest = std::max(oldest, ex_.now() - f.started);

@@ -292,10 +292,11 @@ int cmd_limit(const Args& args) {
         else if (rule == "residual_guess") lo.rules.residual_guess = false;
         else if (rule == "two_sided_start") lo.rules.two_sided_start = false;
         else if (rule == "reuse_fit_points") lo.rules.reuse_fit_points = false;
+        else if (rule == "probe_below") lo.rules.probe_below = false;
         else
           throw UsageError("--without: unknown rule '" + rule +
                            "' (the fast search's rules: ksection, cancel_moot, residual_guess, two_sided_start, "
-                           "reuse_fit_points)");
+                           "reuse_fit_points, probe_below)");
       }
     }
     prepare_output_dir(a.out_dir);

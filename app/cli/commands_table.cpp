@@ -105,7 +105,7 @@ std::vector<Command> make_table() {
                  "default: the fast search, the same bracket guarantee"},
                 {"without", "RULE,...", false,
                  "the fast search without these of its rules (ksection, cancel_moot, residual_guess, "
-                 "two_sided_start, reuse_fit_points; docs/studies.md), to measure what each saves"},
+                 "two_sided_start, reuse_fit_points, probe_below; docs/studies.md), to measure what each saves"},
                 kQuiet}});
   t.push_back({"paper",
                "ravel paper --out DIR [options]",

@@ -5,6 +5,7 @@
 // one on the cheap scene.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -48,6 +49,7 @@ LimitOptions only(bool ksection, bool cancel, bool guess, bool two_sided, bool r
   o.rules.residual_guess = guess;
   o.rules.two_sided_start = two_sided;
   o.rules.reuse_fit_points = reuse;
+  o.rules.probe_below = false;
   return o;
 }
 
@@ -207,20 +209,66 @@ TEST(FastLimit, FitRunsOnlyWhereTheFitLacksAPoint) {
   }
 }
 
-// Every rule at once (the default of `ravel limit`): same answers, far fewer rounds.
+// Every rule at once (the default of `ravel limit`): same answers, far fewer rounds. On a
+// threshold target the probes below the bracket all stop, so they cost time and change no
+// answer: without them the search takes under 0.65 of the reference's time, with them
+// under 0.8.
 TEST(FastLimit, AllRulesMatchTheReference) {
   for (const Law& law : kLaws) {
     SCOPED_TRACE("vbl " + std::to_string(law.vbl));
     const auto t = target(law.a, law.p, law.vbl, slow_near(law.vbl));
     const auto ref = find_ballistic_limit(t, LimitOptions{}, true);
+    double ref_time = 0;
+    for (const auto& s : ref.runs) ref_time += s.wall_time_s;
     LimitOptions o;
     o.jobs = 2;
     const auto f = simulate_fast_search(t, o, true);
     expect_same_answer(f, ref, law.vbl, 1.0);
     EXPECT_LT(f.rounds, ref.rounds);
-    double ref_time = 0;
-    for (const auto& s : ref.runs) ref_time += s.wall_time_s;
-    EXPECT_LT(f.wall_time_s, 0.65 * ref_time);
+    EXPECT_LT(f.wall_time_s, 0.8 * ref_time);
+    o.rules.probe_below = false;
+    const auto np = simulate_fast_search(t, o, true);
+    expect_same_answer(np, ref, law.vbl, 1.0);
+    EXPECT_LT(np.wall_time_s, 0.65 * ref_time);
+  }
+}
+
+// Outcomes that are not a threshold (measured on the default scene at mu = 1.0: 80 and 85
+// m/s perforate, 90 to 100.8 m/s stop, 101.6 m/s perforates): the bisection from 100 m/s
+// finds the crossing at 101, above a perforation 20 m/s lower. The probes below the bracket
+// find the lower band, and the answer is its lowest perforation, within the tolerance.
+TEST(FastLimit, ProbesBelowFindTheLowestPerforation) {
+  const ShootFn t = [](double v, const std::string&) {
+    Shot s;
+    s.perforated = (v >= 80.0 && v < 88.0) || v >= 101.5;
+    s.residual_velocity_mps = s.perforated ? 0.5 * v : 0;
+    s.end_reason = s.perforated ? "perforated" : "rebounded";
+    s.wall_time_s = 1.0;
+    return s;
+  };
+  const auto ref = find_ballistic_limit(t, LimitOptions{}, false);
+  ASSERT_TRUE(ref.converged);
+  EXPECT_GT(ref.lo_mps, 100.0);  // the bisection's answer: the upper crossing
+  LimitOptions o;
+  o.jobs = 2;
+  o.rules.probe_below = false;
+  const auto np = simulate_fast_search(t, o, false);
+  ASSERT_TRUE(np.converged);
+  EXPECT_GT(np.lo_mps, 88.0);  // without probes: a crossing above the lower band
+  o.rules.probe_below = true;
+  const auto f = simulate_fast_search(t, o, false);
+  ASSERT_TRUE(f.converged);
+  EXPECT_GE(f.hi_mps, 80.0);
+  EXPECT_LE(f.hi_mps, 81.0);
+  EXPECT_LT(f.lo_mps, 80.0);
+  EXPECT_NE(std::find(f.rules.begin(), f.rules.end(), "probe_below"), f.rules.end());
+  // The answer stands on every probe below it having stopped.
+  for (int k = 1; k <= o.probe_count; ++k) {
+    const double v = f.hi_mps * (1 - k * o.probe_step);
+    bool stopped_there = false;
+    for (const auto& s : f.runs)
+      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
+    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
   }
 }
 
@@ -340,7 +388,11 @@ TEST(FastLimit, InterruptStopsEveryRunAndPriorRunsResume) {
 }
 
 // The real thing: the cheap scene, two runs in flight on one thread each, against the
-// reference search at the same settings.
+// reference search at the same settings. Without the probes below the bracket both searches
+// bisect the same threshold; with them the fast search also checks 5-20 % below its answer,
+// and on this scene finds a perforation there (45.6 m/s perforates, 46.9 and 50.0 m/s stop:
+// the outcomes near the limit are not a threshold), so its answer is the lower one and every
+// probe below that stopped.
 TEST(FastLimit, CheapSceneMatchesTheReference) {
   auto ov = testing::cheap_scene();
   ov.push_back("solver.threads=1");
@@ -350,6 +402,7 @@ TEST(FastLimit, CheapSceneMatchesTheReference) {
   const auto ref = find_ballistic_limit(scene_shooter("", ov), o, false);
   ASSERT_TRUE(ref.converged);
   o.jobs = 2;
+  o.rules.probe_below = false;
   const auto f = find_ballistic_limit_fast(scene_runner("", ov), o, false);
   for (const auto& w : f.warnings) ADD_FAILURE() << w;
   ASSERT_TRUE(f.converged);
@@ -358,6 +411,19 @@ TEST(FastLimit, CheapSceneMatchesTheReference) {
   // Both brackets hold the limit: they overlap.
   EXPECT_LT(std::max(f.lo_mps, ref.lo_mps), std::min(f.hi_mps, ref.hi_mps));
   EXPECT_LT(f.rounds, ref.rounds);
+  // With the probes: never above the bisection's answer, and standing on stopped probes.
+  o.rules.probe_below = true;
+  const auto p = find_ballistic_limit_fast(scene_runner("", ov), o, false);
+  ASSERT_TRUE(p.converged);
+  EXPECT_LE(p.hi_mps - p.lo_mps, 1.0);
+  EXPECT_LE(p.hi_mps, f.hi_mps + 1e-9);
+  for (int k = 1; k <= o.probe_count; ++k) {
+    const double v = p.hi_mps * (1 - k * o.probe_step);
+    bool stopped_there = false;
+    for (const auto& s : p.runs)
+      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
+    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
+  }
 }
 
 }  // namespace

@@ -101,7 +101,14 @@ assert j["jobs"] == 2 and j["rules"], j
 bl, (lo, hi) = j["ballistic_limit_mps"], j["bracket_mps"]
 assert lo <= bl <= hi and 0 < hi - lo <= 2.0, (bl, lo, hi)
 assert abs(j["error_mps"] - (hi - lo) / 2) < 1e-9, j["error_mps"]
-assert abs(bl - ref["ballistic_limit_mps"]) <= 2.0, (bl, ref["ballistic_limit_mps"])
+# The probes below the bracket only ever move the answer down (the limit is the lowest
+# velocity that perforates); an answer more than the tolerance below the reference's stands on
+# a perforation the bisection did not see, and the stopped runs above it are warned of.
+rbl = ref["ballistic_limit_mps"]
+assert bl <= rbl + 2.0, (bl, rbl)
+warned = [w for w in j["warnings"] if w.startswith("non-monotone")]
+assert bl >= rbl - 2.0 or warned, (bl, rbl, j["warnings"])
+assert any(r["name"] == "probe_below" for r in j["rules"]), j["rules"]
 cancelled = [r for r in j["runs"] if r.get("cancelled")]
 assert len(cancelled) == j["runs_cancelled"] and j["skipped_full_runs"] == (len(cancelled) > 0), j
 for r in j["runs"]:
@@ -111,7 +118,10 @@ for r in j["runs"]:
     if r["failed"] or not r["decided"]:
         continue
     v = r["velocity_mps"]
-    assert (v >= hi) if r["perforated"] else (v <= lo), r
+    if r["perforated"]:
+        assert v >= hi, r
+    else:
+        assert v <= lo or any(f"{v:.2f} m/s did not perforate" in w for w in warned), r
 PY
 
 # --without leaves rules out (and says so in limit.json); an unknown rule is refused by name.
