@@ -78,8 +78,9 @@ int main(int argc, char** argv) {
     std::vector<double> cls(3, 0.0), prev(nc, 0.0);
     std::vector<char> yarn_broken(m.yarn_count(), 0), yarn_touch(m.yarn_count(), 0);
     double next_t = series_every;
-    std::printf("t_us,v_mps,fw_ledger_J,heat_hooked_J,heat_broken_J,heat_other_J,hooked_yarns,broken_yarns,"
-                "strain_energy_J,fabric_ke_J\n");
+    std::printf(
+        "t_us,v_mps,fw_ledger_J,heat_hooked_J,heat_broken_J,heat_other_J,hooked_yarns,broken_yarns,"
+        "strain_energy_J,fabric_ke_J\n");
     ravel::studies::Series sh{"on yarns touching the projectile", {}, {}, ravel::studies::SeriesStyle::line},
         sb{"on broken yarns", {}, {}, ravel::studies::SeriesStyle::line},
         so{"all other crossings", {}, {}, ravel::studies::SeriesStyle::line},
@@ -99,14 +100,18 @@ int main(int argc, char** argv) {
       for (int y = 0; y < m.yarn_count(); ++y)
         if (!yarn_broken[y])
           for (int e = 0; e < m.yarn_size(y) - 1; ++e)
-            if (s.broken(m.yarn_elem_offset[y] + e)) { yarn_broken[y] = 1; break; }
+            if (s.broken(m.yarn_elem_offset[y] + e)) {
+              yarn_broken[y] = 1;
+              break;
+            }
       for (int c = 0; c < nc; ++c) {
         const double h = s.crossing_friction_heat(c), dh = (h - prev[c]) * f;
         prev[c] = h;
         if (dh == 0) continue;
         const auto& cr = m.crossings[c];
-        const int k = yarn_touch[cr.warp_yarn] || yarn_touch[cr.weft_yarn] ? 0
-                      : yarn_broken[cr.warp_yarn] || yarn_broken[cr.weft_yarn] ? 1 : 2;
+        const int k = yarn_touch[cr.warp_yarn] || yarn_touch[cr.weft_yarn]     ? 0
+                      : yarn_broken[cr.warp_yarn] || yarn_broken[cr.weft_yarn] ? 1
+                                                                               : 2;
         cls[k] += dh;
       }
       if (sim.time_s() >= next_t) {
@@ -181,8 +186,8 @@ int main(int argc, char** argv) {
         std::snprintf(b, sizeof b, " %d(%.1f,%.1f|%.2f%%)", k, x.x() * 1e3, x.y() * 1e3, 100 * std::max(sl, sr));
         kl += b;
       }
-      std::printf("  %s %d (grid %d): %zu nodes, yarn max strain %.2f%%, broken elems %d:%s\n", fam ? "weft" : "warp", y,
-                  m.yarn_grid[y], ks.size(), 100 * smax, nb, kl.c_str());
+      std::printf("  %s %d (grid %d): %zu nodes, yarn max strain %.2f%%, broken elems %d:%s\n", fam ? "weft" : "warp",
+                  y, m.yarn_grid[y], ks.size(), 100 * smax, nb, kl.c_str());
     }
     // friction heat by yarn in the interval
     std::map<int, double> hw, hf;
@@ -211,20 +216,22 @@ int main(int argc, char** argv) {
         if (g != 0 && g != 1 && g != 3) continue;
         const int e0 = m.yarn_elem_offset[y], ne = m.yarn_size(y) - 1;
         std::printf("  %s grid %d strain %%:", m.yarn_family[y] ? "weft" : "warp", g);
-        for (int e = 0; e < ne; e += (e < 12 ? 1 : 6)) std::printf(" %s%.2f", s.broken(e0 + e) ? "X" : "", 100 * s.strain(e0 + e));
+        for (int e = 0; e < ne; e += (e < 12 ? 1 : 6))
+          std::printf(" %s%.2f", s.broken(e0 + e) ? "X" : "", 100 * s.strain(e0 + e));
         std::printf("\n");
       }
     }
     if (warp_detail >= 0) {
-      std::printf("  crossings along warp I=%d: J fn ft gap_um slip active | warp strain at kw, weft strain at kf\n", warp_detail);
+      std::printf("  crossings along warp I=%d: J fn ft gap_um slip active | warp strain at kw, weft strain at kf\n",
+                  warp_detail);
       for (int c = 0; c < nc; ++c) {
         const auto& cr = m.crossings[c];
         if (cr.grid_i != warp_detail || cr.grid_j > 40) continue;
         const int kw = s.crossing_warp_node(c), kf = s.crossing_weft_node(c);
         const int ew = m.yarn_elem_offset[cr.warp_yarn] + std::min(kw, m.yarn_size(cr.warp_yarn) - 2);
         const int ef = m.yarn_elem_offset[cr.weft_yarn] + std::min(kf, m.yarn_size(cr.weft_yarn) - 2);
-        std::printf("   J=%2d kw=%2d kf=%2d fn=%7.2f ft=%6.2f gap=%6.1f slip=%6.1f act=%d | %.2f%% %.2f%%\n", cr.grid_j, kw, kf,
-                    s.crossing_normal_force(c), s.crossing_friction_force(c), s.crossing_gap(c) * 1e6,
+        std::printf("   J=%2d kw=%2d kf=%2d fn=%7.2f ft=%6.2f gap=%6.1f slip=%6.1f act=%d | %.2f%% %.2f%%\n", cr.grid_j,
+                    kw, kf, s.crossing_normal_force(c), s.crossing_friction_force(c), s.crossing_gap(c) * 1e6,
                     s.crossing_slip_rate(c), int(s.crossing_active(c)), 100 * s.strain(ew), 100 * s.strain(ef));
       }
     }

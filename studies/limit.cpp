@@ -565,23 +565,27 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
     j["probe_count"] = opt.probe_count;
   }
   j["method"] = r.method;
-  j["method_note"] = r.method == "fast"
-                         ? "ravel limit (fast search): runs in flight at once, each run stopped once moot; the bracket's "
-                           "ends are full runs (docs/studies.md)"
-                         : "ravel limit --reference: bracketing from start_mps by growth, then plain bisection, one run "
-                           "at a time, every run to its end (docs/studies.md)";
+  j["method_note"] =
+      r.method == "fast"
+          ? "ravel limit (fast search): runs in flight at once, each run stopped once moot; the bracket's "
+            "ends are full runs (docs/studies.md)"
+          : "ravel limit --reference: bracketing from start_mps by growth, then plain bisection, one run "
+            "at a time, every run to its end (docs/studies.md)";
   {
     // Each rule: what it does and the error it may add to the answer.
     static const std::vector<std::pair<std::string, std::string>> described{
-        {"ksection", "jobs runs in flight: a free bracket is cut into jobs + 1 parts, a slot that frees splits the part "
-                     "most likely to hold the limit"},
+        {"ksection",
+         "jobs runs in flight: a free bracket is cut into jobs + 1 parts, a slot that frees splits the part "
+         "most likely to hold the limit"},
         {"cancel_moot", "a run whose outcome can no longer move the bracket is stopped at once (listed as cancelled)"},
-        {"residual_guess", "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the "
-                           "next points (75 % of a prior, 25 % uniform)"},
+        {"residual_guess",
+         "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the "
+         "next points (75 % of a prior, 25 % uniform)"},
         {"two_sided_start", "the first round tries start_mps and start_mps / growth at once"},
         {"reuse_fit_points", "fit runs only where no perforating run is within fit_reuse_window of BL x factor"},
-        {"probe_below", "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below "
-                        "the bracket moves it down (the limit is the lowest velocity that perforates)"}};
+        {"probe_below",
+         "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below "
+         "the bracket moves it down (the limit is the lowest velocity that perforates)"}};
     nlohmann::ordered_json rules = nlohmann::ordered_json::array();
     for (const auto& name : r.rules) {
       nlohmann::ordered_json q;

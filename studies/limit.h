@@ -39,7 +39,7 @@ struct Shot {
   std::string cancel_reason;
   double started_s = -1;  // fast search: when the run started and ended, from the search's start
   double ended_s = -1;
-  int round = 0;          // fast search: 1 + the deepest round of the runs finished before it started
+  int round = 0;  // fast search: 1 + the deepest round of the runs finished before it started
 };
 
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
@@ -140,13 +140,13 @@ struct LimitProgress {
   int finished = 0, cancelled = 0;  // runs so far
   std::vector<Shot> in_flight;      // velocity, purpose and started_s of each run still going
   double elapsed_s = 0;
-  double eta_s = -1;                // time left (-1: not known yet)
+  double eta_s = -1;  // time left (-1: not known yet)
   int jobs = 1;
-  std::string line() const;         // "12 runs (2 cancelled), bracket 70.1 - 71.0 m/s, 2 in flight, ~40 s left"
+  std::string line() const;  // "12 runs (2 cancelled), bracket 70.1 - 71.0 m/s, 2 in flight, ~40 s left"
 };
 
 struct LimitHooks {
-  std::function<void(const Shot&)> on_start;                          // a run started
+  std::function<void(const Shot&)> on_start;                         // a run started
   std::function<void(const Shot&, const LimitProgress&)> on_finish;  // a run ended (or was cancelled)
 };
 

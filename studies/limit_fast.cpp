@@ -91,9 +91,7 @@ class ThreadExecutor final : public Executor {
       cv_.wait_for(lock, std::chrono::milliseconds(50));
     }
   }
-  double now() const override {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-  }
+  double now() const override { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
   void rethrow() {
     std::lock_guard<std::mutex> lock(mu_);
     if (error_) std::rethrow_exception(error_);
@@ -169,9 +167,7 @@ double normal_cdf(double x) {
 struct Prior {
   double lo = 0, hi = 1, guess = -1, sigma = 1;
   double z = 0;  // the normal's mass inside (lo, hi)
-  void setup() {
-    z = guess > 0 ? normal_cdf((hi - guess) / sigma) - normal_cdf((lo - guess) / sigma) : 0;
-  }
+  void setup() { z = guess > 0 ? normal_cdf((hi - guess) / sigma) - normal_cdf((lo - guess) / sigma) : 0; }
   double cdf(double v) const {
     const double u = std::clamp((v - lo) / (hi - lo), 0.0, 1.0);
     if (z < 1e-9) return u;
@@ -622,7 +618,8 @@ class Engine {
       const double mean = run_time_ / timed_;
       // k-section: each round cuts the bracket into jobs + 1 parts; then the fit's runs.
       const double w = hi_ - lo_;
-      int rounds = w > opt_.tolerance_mps ? int(std::ceil(std::log(w / opt_.tolerance_mps) / std::log(jobs_ + 1.0))) : 0;
+      int rounds =
+          w > opt_.tolerance_mps ? int(std::ceil(std::log(w / opt_.tolerance_mps) / std::log(jobs_ + 1.0))) : 0;
       int fits = 0;
       if (with_fit_)
         for (size_t i = 0; i < fit_done_.size(); ++i) fits += !fit_done_[i];
@@ -659,7 +656,7 @@ class Engine {
     } else {
       res_.ballistic_limit_mps = 0.5 * (lo_ + hi_);
       if (!res_.converged)
-        res_.warnings.push_back(failed_        ? "search stopped by a failed run before the bracket reached the tolerance"
+        res_.warnings.push_back(failed_ ? "search stopped by a failed run before the bracket reached the tolerance"
                                 : budget() > 0 ? "undecided runs inside the bracket left nothing to bisect"
                                                : "run budget exhausted before the bracket reached the tolerance");
       if (with_fit_ && !failed_) {
@@ -705,7 +702,9 @@ std::string LimitProgress::line() const {
     n += std::snprintf(b + n, sizeof b - size_t(n), ", bracket %.2f - %.2f m/s", lo_mps, hi_mps);
   else
     n += std::snprintf(b + n, sizeof b - size_t(n), ", bracketing (%s)",
-                       hi_mps > 0 ? "perforated, going down" : lo_mps > 0 ? "stopped, going up" : "no outcome yet");
+                       hi_mps > 0   ? "perforated, going down"
+                       : lo_mps > 0 ? "stopped, going up"
+                                    : "no outcome yet");
   if (guess_mps > 0) n += std::snprintf(b + n, sizeof b - size_t(n), ", guess %.1f m/s", guess_mps);
   if (!in_flight.empty()) n += std::snprintf(b + n, sizeof b - size_t(n), ", %zu in flight", in_flight.size());
   if (eta_s >= 0) {

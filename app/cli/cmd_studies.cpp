@@ -222,8 +222,8 @@ int limit_report(const CommonArgs& a, const Scene& scene, const studies::LimitRe
     std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
   if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
   if (r.fit.ok)
-    std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a,
-                r.fit.p, r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
+    std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a, r.fit.p,
+                r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);
   else if (!has_switch(a, "no-fit"))
     std::printf("  Lambert-Jonas: %s\n", r.fit.note.c_str());
   std::printf("  %s/limit.json, %s/residual_velocity.{png,svg,csv}\n", a.out_dir.c_str(), a.out_dir.c_str());
@@ -237,9 +237,10 @@ int limit_fast(const CommonArgs& a, const Scene& scene, const std::string& scene
   // Runs kept in DIR/runs/ by an earlier (interrupted) search count as made.
   const auto prior = studies::kept_runs(scene_path, ov, a.out_dir);
   if (verbose) {
-    std::printf("limit: %s, tolerance %.3g m/s, fast search: %d runs in flight, one solver thread each unless "
-                "--threads; runs end at perforation or rebound (at most %.0f us), moot ones are stopped\n",
-                scene.name.c_str(), lo.tolerance_mps, lo.jobs, scene.solver.max_end_time_s * 1e6);
+    std::printf(
+        "limit: %s, tolerance %.3g m/s, fast search: %d runs in flight, one solver thread each unless "
+        "--threads; runs end at perforation or rebound (at most %.0f us), moot ones are stopped\n",
+        scene.name.c_str(), lo.tolerance_mps, lo.jobs, scene.solver.max_end_time_s * 1e6);
     for (const auto& s : prior)
       std::printf("  kept    %8.2f m/s: %s  [kept from an earlier run, %.1f s]\n", s.velocity_mps,
                   shot_outcome(s).c_str(), s.wall_time_s);
@@ -287,12 +288,18 @@ int cmd_limit(const Args& args) {
       if (reference) throw UsageError("--without: the reference search has no rules to leave out");
       std::stringstream ss(it->second);
       for (std::string rule; std::getline(ss, rule, ',');) {
-        if (rule == "ksection") lo.rules.ksection = false;
-        else if (rule == "cancel_moot") lo.rules.cancel_moot = false;
-        else if (rule == "residual_guess") lo.rules.residual_guess = false;
-        else if (rule == "two_sided_start") lo.rules.two_sided_start = false;
-        else if (rule == "reuse_fit_points") lo.rules.reuse_fit_points = false;
-        else if (rule == "probe_below") lo.rules.probe_below = false;
+        if (rule == "ksection")
+          lo.rules.ksection = false;
+        else if (rule == "cancel_moot")
+          lo.rules.cancel_moot = false;
+        else if (rule == "residual_guess")
+          lo.rules.residual_guess = false;
+        else if (rule == "two_sided_start")
+          lo.rules.two_sided_start = false;
+        else if (rule == "reuse_fit_points")
+          lo.rules.reuse_fit_points = false;
+        else if (rule == "probe_below")
+          lo.rules.probe_below = false;
         else
           throw UsageError("--without: unknown rule '" + rule +
                            "' (the fast search's rules: ksection, cancel_moot, residual_guess, two_sided_start, "
@@ -327,9 +334,10 @@ int cmd_limit(const Args& args) {
       return s;
     };
     if (verbose)
-      std::printf("limit: %s, tolerance %.3g m/s, reference search (bisection, one run at a time), runs end at "
-                  "perforation or rebound (at most %.0f us)\n",
-                  scene.name.c_str(), lo.tolerance_mps, scene.solver.max_end_time_s * 1e6);
+      std::printf(
+          "limit: %s, tolerance %.3g m/s, reference search (bisection, one run at a time), runs end at "
+          "perforation or rebound (at most %.0f us)\n",
+          scene.name.c_str(), lo.tolerance_mps, scene.solver.max_end_time_s * 1e6);
     studies::LimitResult r;
     try {
       r = studies::find_ballistic_limit(logged, lo, with_fit);

@@ -74,8 +74,8 @@ bool LimitRunner::start(const std::string& scene_path, const std::vector<std::st
         state_.progress = p;
         state_.in_flight = p.in_flight;
       };
-      studies::LimitResult r = studies::find_ballistic_limit_fast(
-          studies::scene_runner(scene_path, ov, {}, out_dir), opt, true, &interrupt_, hooks, prior);
+      studies::LimitResult r = studies::find_ballistic_limit_fast(studies::scene_runner(scene_path, ov, {}, out_dir),
+                                                                  opt, true, &interrupt_, hooks, prior);
       write_file_atomic(out_dir + "/limit.json", studies::limit_json(r, opt, scene_path, ov));
       std::lock_guard<std::mutex> lock(mu_);
       state_.in_flight.clear();
@@ -270,8 +270,9 @@ void limit_window(GuiApp& app) {
                   s.result.lo_mps, s.result.hi_mps, s.result.error_mps, s.result.converged ? "" : ", not converged");
     else
       ImGui::TextColored(kBad, "no bracket: %s", s.result.warnings.empty() ? "" : s.result.warnings[0].c_str());
-    ImGui::TextDisabled("%s search, %d runs in flight, %d rounds, %d moot runs stopped, %.0f s", s.result.method.c_str(),
-                        s.result.jobs, s.result.rounds, s.result.runs_cancelled, s.result.wall_time_s);
+    ImGui::TextDisabled("%s search, %d runs in flight, %d rounds, %d moot runs stopped, %.0f s",
+                        s.result.method.c_str(), s.result.jobs, s.result.rounds, s.result.runs_cancelled,
+                        s.result.wall_time_s);
     if (s.result.fit.ok)
       ImGui::TextDisabled("Lambert-Jonas fit: %.1f m/s (a %.2f, p %.2f)", s.result.fit.vbl_mps, s.result.fit.a,
                           s.result.fit.p);
@@ -289,8 +290,7 @@ void limit_window(GuiApp& app) {
     } else {
       ImGui::Text("%.0f s elapsed", el);
     }
-    for (const auto& f : s.in_flight)
-      ImGui::TextDisabled("  running %.2f m/s (%s)", f.velocity_mps, f.purpose.c_str());
+    for (const auto& f : s.in_flight) ImGui::TextDisabled("  running %.2f m/s (%s)", f.velocity_mps, f.purpose.c_str());
   }
   if (ImGui::BeginTable("runs", 4, ImGuiTableFlags_RowBg | ImGuiTableFlags_ScrollY,
                         ImVec2(0, std::max(fs * 6, ImGui::GetContentRegionAvail().y)))) {

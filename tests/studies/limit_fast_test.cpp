@@ -38,7 +38,7 @@ std::function<double(double)> slow_near(double vbl) {
 struct Law {
   double a, p, vbl;
 };
-const std::vector<Law> kLaws{{0.9, 2.0, 12.3}, {0.9, 2.0, 70.4}, {0.75, 2.6, 77.9}, {1.0, 1.6, 99.99},
+const std::vector<Law> kLaws{{0.9, 2.0, 12.3},   {0.9, 2.0, 70.4},  {0.75, 2.6, 77.9}, {1.0, 1.6, 99.99},
                              {0.85, 2.2, 100.0}, {0.8, 3.0, 433.3}, {0.95, 2.0, 61.0}};
 
 LimitOptions only(bool ksection, bool cancel, bool guess, bool two_sided, bool reuse, int jobs) {
@@ -233,6 +233,18 @@ TEST(FastLimit, AllRulesMatchTheReference) {
   }
 }
 
+// The answer of a search with probe_below stands on a stopped full run within 1 % of each
+// probe velocity below its bracket.
+void expect_probes_stopped(const LimitResult& r, const LimitOptions& o) {
+  for (int k = 1; k <= o.probe_count; ++k) {
+    const double v = r.hi_mps * (1 - k * o.probe_step);
+    bool stopped_there = false;
+    for (const auto& s : r.runs)
+      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
+    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
+  }
+}
+
 // Outcomes that are not a threshold (measured on the default scene at mu = 1.0: 80 and 85
 // m/s perforate, 90 to 100.8 m/s stop, 101.6 m/s perforates): the bisection from 100 m/s
 // finds the crossing at 101, above a perforation 20 m/s lower. The probes below the bracket
@@ -263,13 +275,7 @@ TEST(FastLimit, ProbesBelowFindTheLowestPerforation) {
   EXPECT_LT(f.lo_mps, 80.0);
   EXPECT_NE(std::find(f.rules.begin(), f.rules.end(), "probe_below"), f.rules.end());
   // The answer stands on every probe below it having stopped.
-  for (int k = 1; k <= o.probe_count; ++k) {
-    const double v = f.hi_mps * (1 - k * o.probe_step);
-    bool stopped_there = false;
-    for (const auto& s : f.runs)
-      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
-    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
-  }
+  expect_probes_stopped(f, o);
 }
 
 // Undecided runs are left out of the bracket (as the reference does), and a failed run
@@ -370,8 +376,10 @@ TEST(FastLimit, InterruptStopsEveryRunAndPriorRunsResume) {
   bool saw_interrupted = false;
   std::vector<Shot> kept;
   for (const auto& s : part.runs) {
-    if (s.cancelled) saw_interrupted |= s.cancel_reason == "interrupted";
-    else kept.push_back(s);
+    if (s.cancelled)
+      saw_interrupted |= s.cancel_reason == "interrupted";
+    else
+      kept.push_back(s);
   }
   EXPECT_TRUE(saw_interrupted);
   ASSERT_GE(kept.size(), 2u);
@@ -417,13 +425,7 @@ TEST(FastLimit, CheapSceneMatchesTheReference) {
   ASSERT_TRUE(p.converged);
   EXPECT_LE(p.hi_mps - p.lo_mps, 1.0);
   EXPECT_LE(p.hi_mps, f.hi_mps + 1e-9);
-  for (int k = 1; k <= o.probe_count; ++k) {
-    const double v = p.hi_mps * (1 - k * o.probe_step);
-    bool stopped_there = false;
-    for (const auto& s : p.runs)
-      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
-    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
-  }
+  expect_probes_stopped(p, o);
 }
 
 }  // namespace
