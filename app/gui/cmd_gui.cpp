@@ -14,7 +14,7 @@
 //                          range:LO:HI | range:auto, scrub:T_US, live, pick:ELEMENT_ID,
 //                          pick-crossing:ID, open:PATH, screenshot:FILE, export-results,
 //                          export-scene, export-vtk:DIR, record:DIR (image sequence),
-//                          sweep:KEY=LIST, limit (into --export-dir), demo:NAME, continue,
+//                          sweep:KEY=LIST, limit[:JOBS] (into --export-dir; JOBS runs in flight), demo:NAME, continue,
 //                          compare-exit
 //   --pause-at-us T        pause the run when simulated time reaches T; with --frames the
 //                          app keeps going past frame N until then (for reproducible pictures),
@@ -209,7 +209,7 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
   } else if (a.action == "sweep") {
     if (!gui::start_scripted_sweep(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "limit") {
-    if (!gui::start_scripted_limit(app)) script_failed(app, app.notice);
+    if (!gui::start_scripted_limit(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "demo") {  // the Demos menu (app/gui/gui_demos.h)
     if (!app.compare || !app.compare->start_demo(app, a.arg)) script_failed(app, "demo: " + app.notice);
   } else if (a.action == "continue") {

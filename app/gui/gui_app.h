@@ -175,7 +175,7 @@ bool export_running(const GuiApp& app);
 bool studies_running(const GuiApp& app);
 // Scripted studies (--do sweep:KEY=LIST, --do limit): start into export_dir/sweep, /limit.
 bool start_scripted_sweep(GuiApp& app, const std::string& vary);
-bool start_scripted_limit(GuiApp& app);
+bool start_scripted_limit(GuiApp& app, const std::string& jobs = "");  // jobs: runs in flight, "" = the window's
 std::string next_screenshot_path(const GuiApp& app);
 
 }  // namespace ravel::app::gui

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <thread>
 
@@ -348,8 +349,18 @@ bool start_scripted_sweep(GuiApp& app, const std::string& vary) {
   return ok;
 }
 
-bool start_scripted_limit(GuiApp& app) {
+bool start_scripted_limit(GuiApp& app, const std::string& jobs) {
   app.studies->show_limit = true;
+  if (!jobs.empty()) {
+    char* end = nullptr;
+    const long j = std::strtol(jobs.c_str(), &end, 10);
+    if (*end != '\0' || j < 1 || j > 64) {
+      app.notice = "limit: runs in flight must be a whole number from 1 to 64, got '" + jobs + "'";
+      app.notice_is_error = true;
+      return false;
+    }
+    app.studies->limit_jobs = int(j);
+  }
   const bool ok = start_limit(app);
   if (!ok) {
     app.notice = "limit: " + app.studies->limit_error;
