@@ -176,13 +176,20 @@ void InternalForces<Real>::run() {
   run_.broken[0] += newly_broken[0];
   run_.broken[1] += newly_broken[1];
   // Bending: compression-only springs between midpoints of adjoining elements.
+  // A spring goes with either of its elements; the energy it held then is released with them
+  // (booked at the last step it acted: unbooked, a folded yarn's spring took its energy out of
+  // the ledger at every break, 0.003 J a break on the 20 mm test patch, 4 % of its impact).
   const int nbend = int(model_.bend_k.size());
-  double bend_stored = 0;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored) if (ctx_.threads > 1)
+  double bend_stored = 0, bend_released = 0;
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored, bend_released) \
+  if (ctx_.threads > 1)
   for (int s = 0; s < nbend; ++s) {
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+    double& held = s_.bend_energy[s];
     if (s_.broken_flag[e1] || s_.broken_flag[e2]) {
       s_.bend_force[s].setZero();
+      bend_released += held;
+      held = 0;
       continue;
     }
     const int ax = model_.bend_mirror[s];
@@ -192,8 +199,9 @@ void InternalForces<Real>::run() {
       const Real mc = Real(0.5) * (s_.x[model_.elem_a[e1]][ax] + s_.x[model_.elem_b[e1]][ax]);
       const double comp = model_.bend_rest[s] - 2 * std::abs(double(mc));
       s_.bend_force[s].setZero();
+      held = comp > 0 ? 0.25 * model_.bend_k[s] * comp * comp : 0.0;
+      bend_stored += held;
       if (comp > 0) {
-        bend_stored += 0.25 * model_.bend_k[s] * comp * comp;
         s_.bend_force[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
       }
       continue;
@@ -205,6 +213,7 @@ void InternalForces<Real>::run() {
     const double r = model_.bend_rest[s], k = model_.bend_k[s], sl = double(len);
     if (sl >= r) {
       s_.bend_force[s].setZero();
+      held = 0;
       continue;
     }
     // Compression-only spring 1/2 k (r - s)^2, pushing midpoint 2 away from 1. Below
@@ -212,12 +221,13 @@ void InternalForces<Real>::run() {
     // continues as k r^2/4 - k s^2/2, whose force k d stays smooth through s = 0, where
     // the cone of 1/2 k (r - s)^2 would flip direction from one step to the next.
     if (sl >= 0.5 * r) {
-      bend_stored += 0.5 * k * (r - sl) * (r - sl);
+      held = 0.5 * k * (r - sl) * (r - sl);
       s_.bend_force[s] = d * Real(k * (r - sl) / sl);
     } else {
-      bend_stored += 0.25 * k * r * r - 0.5 * k * sl * sl;
+      held = 0.25 * k * r * r - 0.5 * k * sl * sl;
       s_.bend_force[s] = d * Real(k);
     }
+    bend_stored += held;
   }
   // Gather, and with each node's force the free update of Eq 1-2 (stage.h: free_update).
   const int n = model_.node_count;
@@ -236,7 +246,7 @@ void InternalForces<Real>::run() {
   s_.book.stored_now = stored + bend_stored;
   s_.book.damping_cum += damp;
   s_.book.viscous_cum += diss;
-  s_.book.released_cum += released;
+  s_.book.released_cum += released + bend_released;
   run_.max_strain = max_strain;
 }
 

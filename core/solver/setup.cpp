@@ -35,6 +35,7 @@ State<Real> initial_state(const Model& model, const Context<Real>& ctx, RunState
   s.elem_force.assign(ne, V3::Zero());
   s.elem_energy.assign(ne, 0.0);
   s.bend_force.assign(model.bend_k.size(), V3::Zero());
+  s.bend_energy.assign(model.bend_k.size(), 0.0);
   for (int e = 0; e < ne; ++e) {
     // Initial strain (slack for the straight-chord models).
     const Real len = (s.x[model.elem_b[e]] - s.x[model.elem_a[e]]).norm();

@@ -98,6 +98,7 @@ struct State {
   std::vector<std::uint8_t> broken_flag;
   std::vector<V3> elem_force, bend_force;
   std::vector<double> elem_energy;
+  std::vector<double> bend_energy;  // per bending spring: its stored energy at the last step it acted
   // --- Crossings (SPEC §4), one record each (a crossing's step reads and writes most of it).
   std::vector<CrossingState<Real>> cr;
   // --- Projectile (modelled part): position, velocity.
@@ -142,6 +143,7 @@ struct State {
     ar.vec(broken_flag);
     ar.vec(elem_force);
     ar.vec(bend_force);
+    ar.vec(bend_energy);
     ar.vec(elem_energy);
     ar.vec(cr);
     ar.pod(xp);
