@@ -105,8 +105,8 @@ struct Simulation::Impl {
   // before perforation (or by the end) and those of them within kNearClamp_m of a clamp.
   double first_break_distance = -1;
   double broken_before_perforation = -1, broken_near_clamp = -1;
-  int extensions = 0;               // times extend_to reopened the run
-  double end_time = 0;              // the model's, or later when a study extends an undecided run (extend_to)
+  int extensions = 0;   // times extend_to reopened the run
+  double end_time = 0;  // the model's, or later when a study extends an undecided run (extend_to)
   double wall_s = 0;
   std::vector<std::string> warnings;
   long search_lost_before = 0;  // diagnostics().skipped_nodes after the previous step
@@ -597,7 +597,8 @@ Summary Simulation::summary() const {
   s.energy_balance_error = I.worst_balance;
   s.friction_work_J = I.solver->ledger().friction_work_J * m.symmetry_factor;
   s.first_break_time_s = I.first_break_time;
-  s.friction_work_to_first_break_J = I.first_break_time >= 0 ? I.friction_at_first_break * m.symmetry_factor : s.friction_work_J;
+  s.friction_work_to_first_break_J =
+      I.first_break_time >= 0 ? I.friction_at_first_break * m.symmetry_factor : s.friction_work_J;
   s.friction_work_to_perforation_J = s.perforated ? I.friction_at_perforation * m.symmetry_factor : s.friction_work_J;
   s.first_break_distance_m = I.first_break_distance;
   double nb = I.broken_before_perforation, nc = I.broken_near_clamp;
@@ -665,6 +666,13 @@ Summary Simulation::summary() const {
         std::to_string(d.passed_through) +
         " crossings found with yarns passed through each other by more than a yarn diameter; released" +
         at(d.first_pass_time, d.first_pass_i, d.first_pass_j));
+  if (d.shift_broken)
+    s.warnings.push_back(
+        std::to_string(d.shift_broken) +
+        " yarn elements of the modelled part were stretched to failure by contact position shifts (penetration "
+        "left from earlier steps, removed by moving nodes) rather than by their own tension (first at t = " +
+        fmt("%.4g", d.first_shift_break_time * 1e6) +
+        " us): those breaks are the contact method's; lower solver.dt_factor (docs/MODEL.md §4)");
   if (d.balance_drift)
     s.warnings.push_back(
         "the energy balance drifted past solver.max_balance_error = " + fmt("%.3g", I.scene.solver.max_balance_error) +

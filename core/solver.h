@@ -63,10 +63,13 @@ struct ContactDiagnostics {
   long passed_through = 0;  // yarns found passed through each other by more than D
   long lost_segments = 0;   // both adjoining segments broken: crossing released
   long separated = 0;       // side test flipped while the yarns were apart: released, not a fault
+  long shift_broken = 0;    // elements stretched to failure by contact position shifts (modelled part)
+  double first_shift_break_time = -1;
   double first_skip_time = -1, first_ravel_time = -1, first_pass_time = -1;
   int first_skip_i = 0, first_skip_j = 0, first_ravel_i = 0, first_ravel_j = 0, first_pass_i = 0, first_pass_j = 0;
-  double max_penetration = 0;  // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
-  bool balance_drift = false;  // the energy balance drifted past solver.max_balance_error slowly
+  double max_penetration = 0;   // deepest yarn-yarn interpenetration left at the end of a step (m), sampled
+  double last_penetration = 0;  // ... at the latest sample (every 8th step)
+  bool balance_drift = false;   // the energy balance drifted past solver.max_balance_error slowly
   double balance_drift_time = -1;
 };
 

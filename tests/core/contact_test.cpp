@@ -301,25 +301,36 @@ TEST(Contact, SplitRemovesOldPenetrationWithoutVelocity) {
   EXPECT_NEAR(closest, kL1, 1e-2 * kL1);
 }
 
-// After every step no crossing is left interpenetrating by more than a fraction of D. One
-// Jacobi pass resolves each rigid crossing exactly; what is left comes from neighbouring
-// crossings sharing a node: about 9 um at worst here, bounded at 10 % of D (20 um) through
-// impact, failure and perforation. A compressible crossing's closure below its flattened
-// distance c_min is removed at a pace (compressed_shift), but never more than half of c_min
-// is left (kFloorLeft; measured 50 um): the yarns never pass through each other (before that
-// bound, a crossing overrun by a snapping broken end was left 0.24 mm deep, through its
-// partner). Bound: that half, plus the neighbours' 10 % of D.
+// After every step no crossing is left interpenetrating by more than a fraction of D for
+// long. One Jacobi pass resolves each rigid crossing exactly; what is left comes from
+// neighbouring crossings sharing a node: about 9 um at worst here, bounded at 10 % of D
+// (20 um) through impact, failure and perforation. A compressible crossing's closure below its
+// flattened distance c_min is removed at a pace (compressed_shift, 0.02 D per step): a broken
+// end snapping through a crossing here leaves it 236 um below c_min, through its partner but
+// by less than D (a crossing through by more than D is released), and the pace takes it below
+// 60 um within 25 steps (measured; removing all but half of c_min at once, the rule until
+// 2026-12-05, kept it at 50 um but stretched unloaded yarns to failure on larger plies:
+// EndOfEvent.NoYarnIsBrokenByAContactShift). Bounds: never through by more than D, and
+// deeper than half of c_min plus the neighbours' 10 % of D for at most 8 samples (64 steps).
 TEST(Contact, InterpenetrationAfterEachStepIsBounded) {
   const double D = 0.2e-3, c_min = 0.1e-3;
   for (const char* law : {"fabric.crossing_compression=rigid", "fabric.crossing_compression=hyperbolic"}) {
     SCOPED_TRACE(law);
     Simulation sim(
         test::scene_with(test::small_patch() + std::vector<std::string>{"projectile.velocity_mps=300", law}));
-    sim.run();
     const bool rigid = std::string(law).find("rigid") != std::string::npos;
+    const double deep = (rigid ? 0.0 : 0.5 * c_min) + 0.1 * D;
+    int streak = 0, longest = 0;
+    while (!sim.finished()) {
+      sim.step();
+      if (sim.solver().steps() % 8) continue;  // sampled every 8th step
+      streak = sim.solver().diagnostics().last_penetration > deep ? streak + 1 : 0;
+      longest = std::max(longest, streak);
+    }
     EXPECT_GT(sim.summary().broken_weft, 0);
     EXPECT_GT(sim.solver().diagnostics().max_penetration, 0.0);
-    EXPECT_LT(sim.solver().diagnostics().max_penetration, (rigid ? 0.0 : 0.5 * c_min) + 0.1 * D);
+    EXPECT_LT(sim.solver().diagnostics().max_penetration, (rigid ? D : c_min + D));
+    EXPECT_LE(longest, rigid ? 0 : 8) << "samples in a row deeper than " << deep;
   }
 }
 
