@@ -184,13 +184,14 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["energy_absorbed_J"] = outcome(s.energy_absorbed_J);
   j["perforation_time_s"] = s.perforation_time_s >= 0 && !undefined ? nlohmann::ordered_json(s.perforation_time_s)
                                                                     : nlohmann::ordered_json(nullptr);
+  j["decided_passing"] = s.decided_passing;
   j["energy_balance_error"] = s.energy_balance_error;
   j["friction_work_J"] = outcome(s.friction_work_J);
   j["friction_work_to_first_break_J"] = outcome(s.friction_work_to_first_break_J);
   j["friction_work_to_perforation_J"] = outcome(s.friction_work_to_perforation_J);
   j["first_break_distance_mm"] = s.first_break_distance_m >= 0 && !undefined
-                                    ? nlohmann::ordered_json(s.first_break_distance_m * 1e3)
-                                    : nlohmann::ordered_json(nullptr);
+                                     ? nlohmann::ordered_json(s.first_break_distance_m * 1e3)
+                                     : nlohmann::ordered_json(nullptr);
   j["broken_before_perforation_elements"] = s.broken_before_perforation;
   j["broken_near_clamp_elements"] = s.broken_near_clamp;
   j["first_break_time_s"] = s.first_break_time_s >= 0 && !undefined ? nlohmann::ordered_json(s.first_break_time_s)

@@ -225,8 +225,8 @@ std::vector<KeyDef> make_defs() {
       fabric.compression_force_n);
   NUM("fabric.packed_gap_mm", "mm",
       "c_pack: centre distance of two crossing yarns whose fibres are packed (end of the packing stage, "
-      "before the fibres themselves flatten); below D; at or below c_min the law has one stage", 1e-3, 0, true, inf,
-      fabric.packed_gap_m);
+      "before the fibres themselves flatten); below D; at or below c_min the law has one stage",
+      1e-3, 0, true, inf, fabric.packed_gap_m);
   NUM("fabric.flattening_force_n", "N",
       "F_flat: normal force per crossing that closes half of the flattening stage c_pack - c_min", 1, 0, true, inf,
       fabric.flattening_force_n);
@@ -292,6 +292,11 @@ std::vector<KeyDef> make_defs() {
        "true: penetration left from earlier steps is removed by moving the nodes (no energy injected); false: the "
        "paper's velocity-only correction",
        solver.split_penetration);
+  BOOL("solver.decide_passing",
+       "true: end the run as perforated once the projectile is passing through (held only by yarns with no intact "
+       "path to a clamp, above 2 % of its impact speed, and at its present drag it would travel further than the "
+       "fabric's largest half-size before stopping, for 100 us); the fast limit search sets it (docs/MODEL.md §8)",
+       solver.decide_passing);
   BOOL("solver.projectile_holds",
        "true: a node the projectile pushed out does not yield into it under yarn contact (the push goes to the "
        "projectile); false: the yarn contact moves it freely",
@@ -794,8 +799,7 @@ void validate_scene(Scene& s) {
     fail("fabric.flattened_gap_mm", "the flattened centre distance (" + fmt3(f.flattened_gap_m * 1e3) +
                                         " mm) must be below the rest distance D = fabric.thickness_mm / 2 = " +
                                         fmt3(0.5 * f.thickness_m * 1e3) + " mm");
-  if (f.crossing_compression == CrossingCompression::hyperbolic &&
-      f.packed_gap_m >= 0.5 * f.thickness_m)
+  if (f.crossing_compression == CrossingCompression::hyperbolic && f.packed_gap_m >= 0.5 * f.thickness_m)
     fail("fabric.packed_gap_mm", "the packed centre distance (" + fmt3(f.packed_gap_m * 1e3) +
                                      " mm) must be below the rest distance D = fabric.thickness_mm / 2 = " +
                                      fmt3(0.5 * f.thickness_m * 1e3) + " mm");

@@ -50,8 +50,8 @@ struct FabricParams {
   // at the force scale F_half), then the packed fibres themselves flatten (c_pack -> c_min, at
   // the force scale F_flat): c = c_min + (c_pack - c_min) / (1 + f / F_flat) + (c0 - c_pack) /
   // (1 + f / F_half). c_pack = c_min is the one-stage law.
-  double packed_gap_m = 0.10e-3;      // c_pack: centre distance once the fibres are packed
-  double flattening_force_n = 50;     // F_flat: force per crossing that closes half of c_pack - c_min
+  double packed_gap_m = 0.10e-3;   // c_pack: centre distance once the fibres are packed
+  double flattening_force_n = 50;  // F_flat: force per crossing that closes half of c_pack - c_min
 };
 
 struct YarnParams {
@@ -106,6 +106,9 @@ struct SolverParams {
   double max_balance_error = 0.05;  // |ledger total - initial| / initial above this -> diverged
   double max_search_lost =
       0.01;  // nearest-pair search lost at more than this fraction of crossings in one step -> diverged
+  // End a run as perforated once the projectile is passing through (docs/MODEL.md §8,
+  // "Passing"): the limit searches' fast rule decide_passing; off for a plain run.
+  bool decide_passing = false;
 };
 
 struct OutputParams {

@@ -62,6 +62,15 @@ constexpr double kTouching_m = 1e-6;
 // nothing left to perforate with, it is stopped.
 constexpr double kCaughtSpeed = 0.01;
 constexpr double kCaught_s = 100e-6;
+// Passing (solver.decide_passing, docs/MODEL.md §8): the projectile, above this share of the
+// impact speed, would at its present drag (the loss of its kinetic energy over the last
+// kPassWindow_s) travel further than the fabric's largest half-size from the strike point
+// before stopping, has done so for kPassHold_s, and no node on it is held to a clamp by
+// unbroken elements: only yarns held by friction drag it, and the longest of them is pulled
+// out of the weave within that distance.
+constexpr double kPassSpeed = 0.02;
+constexpr double kPassWindow_s = 50e-6;
+constexpr double kPassHold_s = 100e-6;
 // solver.max_search_lost never trips on fewer crossings than this in one step (a small
 // patch has a few hundred crossings; one lost pair is a warning, not a divergence).
 constexpr double kMinSearchLost = 4;
@@ -111,6 +120,11 @@ struct Simulation::Impl {
   std::vector<std::string> warnings;
   long search_lost_before = 0;  // diagnostics().skipped_nodes after the previous step
   double slow_since = -1;       // time from which the projectile has been below kCaughtSpeed V0 (-1: not)
+  // Passing (solver.decide_passing): the projectile's forward kinetic energy per unit mass at
+  // the checks of the last kPassWindow_s, and since when the stopping distance has been long.
+  std::vector<std::pair<double, double>> pass_track;
+  double passing_since = -1;
+  bool decided_passing = false;
 
   const Model& model() const { return solver->model(); }
 
@@ -266,8 +280,9 @@ struct Simulation::Impl {
   }
 
   // Nodes connected to a clamped node (or, for a fabric without clamps, to the node
-  // farthest from the impact) through unbroken elements and touching crossings.
-  std::vector<char> attached_nodes() const {
+  // farthest from the impact) through unbroken elements and touching crossings (with
+  // through_crossings false: through unbroken elements only, the yarns that hold by tension).
+  std::vector<char> attached_nodes(bool through_crossings = true) const {
     const Model& m = model();
     const int n = m.node_count;
     std::vector<int> parent(n);
@@ -279,7 +294,7 @@ struct Simulation::Impl {
     auto join = [&](int a, int b) { parent[find(a)] = find(b); };
     for (int e = 0; e < m.element_count; ++e)
       if (!solver->broken(e)) join(m.elem_a[e], m.elem_b[e]);
-    for (int c = 0; c < int(m.crossings.size()); ++c) {
+    for (int c = 0; c < int(m.crossings.size()) && through_crossings; ++c) {
       if (!solver->crossing_active(c) || solver->crossing_gap(c) > m.crossings[c].contact_distance) continue;
       const auto& cr = m.crossings[c];
       join(m.yarn_node(cr.warp_yarn, solver->crossing_warp_node(c)),
@@ -299,6 +314,40 @@ struct Simulation::Impl {
     std::vector<char> out(n);
     for (int i = 0; i < n; ++i) out[i] = root_anchor[find(i)];
     return out;
+  }
+
+  // Passing (solver.decide_passing; the constants above). Called with the perforation check.
+  bool passing() {
+    const Model& m = model();
+    const double v = forward_velocity(), t = solver->time();
+    if (!solver->had_contact() || v < kPassSpeed * m.impact_velocity) {
+      pass_track.clear();
+      passing_since = -1;
+      return false;
+    }
+    pass_track.emplace_back(t, 0.5 * v * v);
+    size_t old = 0;  // the latest check at least kPassWindow_s back
+    while (old + 1 < pass_track.size() && t - pass_track[old + 1].first >= kPassWindow_s) ++old;
+    pass_track.erase(pass_track.begin(), pass_track.begin() + long(old));
+    const auto [t0, ke0] = pass_track.front();
+    if (t - t0 < kPassWindow_s) return false;
+    const double ke = pass_track.back().second, power = (ke0 - ke) / (t - t0);
+    const double reach = std::max(0.5 * scene.fabric.width_m + std::abs(scene.projectile.offset_x_m),
+                                  0.5 * scene.fabric.length_m + std::abs(scene.projectile.offset_y_m));
+    // Stopping distance at constant drag: ke / (power / v).
+    if (!(power <= 0 || ke * v > power * reach)) {
+      passing_since = -1;
+      return false;
+    }
+    if (passing_since < 0) passing_since = t;
+    if (t - passing_since < kPassHold_s) return false;
+    const std::vector<char> held = attached_nodes(false);
+    const Vec3d xp = solver->projectile_position();
+    for (int i = 0; i < m.node_count; ++i) {
+      Vec3d nrm;
+      if (held[i] && m.shape.sdf(Vec3d(solver->position(i) - xp), nrm) <= kTouching_m) return false;
+    }
+    return true;
   }
 
   void finish(RunStatus s, EndReason r, const std::string& why) {
@@ -347,6 +396,17 @@ struct Simulation::Impl {
     if (n % 16 == 0 || solver->time() >= end_time) {
       if (perforation_confirmed()) {
         finish(RunStatus::completed, EndReason::perforated, "the projectile passed through the fabric");
+        return false;
+      }
+      if (scene.solver.decide_passing && passing()) {
+        decided_passing = true;
+        perforation_time = solver->time();
+        count_breaks(&broken_before_perforation, &broken_near_clamp);
+        friction_at_perforation = solver->ledger().friction_work_J;
+        finish(RunStatus::completed, EndReason::perforated,
+               "the projectile is passing through the fabric: held only by yarns with no intact path to a clamp, "
+               "and at its present drag it would travel further than the fabric's half-size before stopping "
+               "(solver.decide_passing)");
         return false;
       }
       if (solver->had_contact() && forward_velocity() < 0) {
@@ -507,6 +567,9 @@ void impl_io(Ar& ar, I& s) {
   ar.strings(s.warnings);
   ar.pod(s.search_lost_before);
   ar.pod(s.slow_since);
+  ar.vec(s.pass_track);
+  ar.pod(s.passing_since);
+  ar.pod(s.decided_passing);
 }
 }  // namespace
 
@@ -585,6 +648,7 @@ Summary Simulation::summary() const {
   s.divergence_step = I.solver->divergence_step();
   s.divergence_time_s = I.solver->divergence_time();
   s.perforated = I.reason == EndReason::perforated;
+  s.decided_passing = I.decided_passing;
   s.impact_velocity_mps = m.impact_velocity;
   const double vf = I.forward_velocity();
   // Residual velocity: the exit speed after perforation; 0 when the fabric stopped the

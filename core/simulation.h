@@ -53,20 +53,23 @@ struct Summary {
   double residual_velocity_mps = 0;  // speed along the flight path at the end (perforation: exit speed)
   double energy_absorbed_J = 0;      // M (V0^2 - Vr^2) / 2
   double perforation_time_s = -1;    // < 0: none
-  double energy_balance_error = 0;   // worst |balance error| over the run
-  double friction_work_J = 0;        // yarn-yarn friction work over the whole run
+  // Perforated by solver.decide_passing's early decision (the run stopped while the projectile
+  // was still dragging yarns: residual velocity and perforation time are those of the decision).
+  bool decided_passing = false;
+  double energy_balance_error = 0;  // worst |balance error| over the run
+  double friction_work_J = 0;       // yarn-yarn friction work over the whole run
   // ... up to the first broken element (the whole run if none broke) and up to perforation
   // (the whole run if it did not perforate): the windows of docs/MODEL.md §8.
   double friction_work_to_first_break_J = 0;
   double friction_work_to_perforation_J = 0;
-  double first_break_time_s = -1;  // < 0: no element broke
+  double first_break_time_s = -1;      // < 0: no element broke
   double first_break_distance_m = -1;  // in-plane distance of the first break from the aim point
   // Elements broken before perforation (every break, if it did not perforate), whole fabric,
   // and those of them whose midpoint lies within 2 mm of a clamped edge.
   int broken_before_perforation = 0, broken_near_clamp = 0;
-  std::string model;                 // quarter | half | full
-  std::string model_reason;          // why that model
-  std::string contact_model;         // sliding | pin_jointed
+  std::string model;          // quarter | half | full
+  std::string model_reason;   // why that model
+  std::string contact_model;  // sliding | pin_jointed
   // The whole fabric (what every count, energy and history column describes) ...
   int node_count = 0, element_count = 0, crossing_count = 0;
   // ... and the part the solver models (quarter / half / full, see `model`).

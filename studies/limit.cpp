@@ -151,6 +151,12 @@ void describe_error(LimitResult& res) {
   if (non_monotone) note += "; but some runs contradict a threshold (see warnings): the error is larger";
   if (res.runs_cancelled > 0)
     note += "; " + std::to_string(res.runs_cancelled) + " runs stopped as moot, none of them a bracket end";
+  int decided = 0;
+  for (const auto& s : res.runs) decided += s.decided_passing && !s.cancelled;
+  if (decided > 0)
+    note += "; " + std::to_string(decided) +
+            " perforating runs ended once the projectile was passing through (decide_passing), an early end "
+            "that running on never reversed in the cases measured (docs/MODEL.md section 8)";
   res.error_note = note;
 }
 
@@ -337,6 +343,7 @@ nlohmann::ordered_json shot_to_json(const Shot& s) {
   q["perforation_time_s"] =
       s.perforation_time_s >= 0 ? nlohmann::ordered_json(s.perforation_time_s) : nlohmann::ordered_json(nullptr);
   q["end_reason"] = s.end_reason;
+  if (s.decided_passing) q["decided_passing"] = true;
   q["decided"] = s.decided;
   q["failed"] = s.failed;
   if (s.failed) q["error"] = s.error;
@@ -367,6 +374,7 @@ Shot shot_from_json(const nlohmann::json& q) {
   s.energy_absorbed_J = num("energy_absorbed_J", 0);
   s.perforation_time_s = num("perforation_time_s", -1);
   s.end_reason = q.value("end_reason", "");
+  s.decided_passing = q.value("decided_passing", false);
   s.decided = q.value("decided", true);
   s.failed = q.value("failed", false);
   s.error = q.value("error", "");
@@ -433,6 +441,40 @@ std::string kept_path(const std::string& cache_dir, double v) {
 
 }  // namespace
 
+const std::vector<FastRuleInfo>& fast_rule_table() {
+  static const std::vector<FastRuleInfo> t{
+      {"ksection", &FastRules::ksection,
+       "jobs runs in flight: a free bracket is cut into jobs + 1 parts, a slot that frees splits the part most "
+       "likely to hold the limit"},
+      {"cancel_moot", &FastRules::cancel_moot,
+       "a run whose outcome can no longer move the bracket is stopped at once (listed as cancelled)"},
+      {"residual_guess", &FastRules::residual_guess,
+       "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the next points (75 % "
+       "of a prior, 25 % uniform)"},
+      {"two_sided_start", &FastRules::two_sided_start,
+       "the first round tries start_mps and start_mps / growth at once"},
+      {"reuse_fit_points", &FastRules::reuse_fit_points,
+       "fit runs only where no perforating run is within fit_reuse_window of BL x factor"},
+      {"probe_below", &FastRules::probe_below,
+       "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below the bracket "
+       "moves it down (the limit is the lowest velocity that perforates)"},
+      {"decide_passing", &FastRules::decide_passing,
+       "a run ends as perforated once the projectile is passing through (solver.decide_passing: held only by "
+       "yarns with no intact path to a clamp, and at its present drag it would travel further than the fabric's "
+       "half-size before stopping); its residual velocity is the speed then"}};
+  return t;
+}
+
+void add_rule_overrides(const FastRules& rules, std::vector<std::string>& overrides) {
+  if (rules.decide_passing) overrides.push_back("solver.decide_passing=true");
+}
+
+std::string fast_rule_names() {
+  std::string out;
+  for (const auto& r : fast_rule_table()) out += (out.empty() ? "" : ", ") + std::string(r.name);
+  return out;
+}
+
 RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>& overrides,
                    std::function<void(const Simulation&)> on_run, const std::string& cache_dir) {
   const std::string fingerprint = cache_dir.empty() ? std::string() : run_fingerprint(scene_path, overrides);
@@ -483,6 +525,7 @@ RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>
     shot.perforation_time_s = s.perforation_time_s;
     shot.end_reason = to_string(s.end_reason);
     shot.decided = s.end_reason != EndReason::end_time;
+    shot.decided_passing = s.decided_passing;
     shot.wall_time_s = s.wall_time_s;
     shot.broken_warp_yarns = s.broken_warp_yarns;
     shot.broken_weft_yarns = s.broken_weft_yarns;
@@ -568,31 +611,21 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   j["method_note"] =
       r.method == "fast"
           ? "ravel limit (fast search): runs in flight at once, each run stopped once moot; the bracket's "
-            "ends are full runs (docs/studies.md)"
+            "ends are full runs, or perforating runs decided once the projectile was passing through "
+            "(docs/studies.md)"
           : "ravel limit --reference: bracketing from start_mps by growth, then plain bisection, one run "
             "at a time, every run to its end (docs/studies.md)";
   {
     // Each rule: what it does and the error it may add to the answer.
-    static const std::vector<std::pair<std::string, std::string>> described{
-        {"ksection",
-         "jobs runs in flight: a free bracket is cut into jobs + 1 parts, a slot that frees splits the part "
-         "most likely to hold the limit"},
-        {"cancel_moot", "a run whose outcome can no longer move the bracket is stopped at once (listed as cancelled)"},
-        {"residual_guess",
-         "Lambert-Jonas p = 2 through the lowest perforating runs' residual velocities places the "
-         "next points (75 % of a prior, 25 % uniform)"},
-        {"two_sided_start", "the first round tries start_mps and start_mps / growth at once"},
-        {"reuse_fit_points", "fit runs only where no perforating run is within fit_reuse_window of BL x factor"},
-        {"probe_below",
-         "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below "
-         "the bracket moves it down (the limit is the lowest velocity that perforates)"}};
     nlohmann::ordered_json rules = nlohmann::ordered_json::array();
     for (const auto& name : r.rules) {
       nlohmann::ordered_json q;
       q["name"] = name;
-      for (const auto& [n, d] : described)
-        if (n == name) q["what"] = d;
-      q["error_mps"] = 0.0;  // none moves a bracket end: both are full runs
+      for (const auto& info : fast_rule_table())
+        if (name == info.name) q["what"] = info.what;
+      // None moves a bracket end: both are full runs, or (decide_passing) runs whose outcome
+      // running on did not reverse in any case measured (docs/studies.md).
+      q["error_mps"] = 0.0;
       rules.push_back(q);
     }
     j["rules"] = rules;
@@ -603,11 +636,20 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
   for (const auto& s : r.runs) finished += !s.cancelled;
   j["runs_finished"] = finished;
   j["runs_cancelled"] = r.runs_cancelled;
-  j["skipped_full_runs"] = r.runs_cancelled > 0;
+  int decided = 0;
+  for (const auto& s : r.runs) decided += s.decided_passing && !s.cancelled;
+  j["runs_decided_passing"] = decided;
+  j["skipped_full_runs"] = r.runs_cancelled > 0 || decided > 0;
+  std::string skipped;
   if (r.runs_cancelled > 0)
-    j["skipped_note"] = "this search stopped " + std::to_string(r.runs_cancelled) +
-                        " runs before their end once their outcome was moot (each listed with cancelled: true); the "
-                        "reference runs every run to its end; no bracket end is a stopped run";
+    skipped = "this search stopped " + std::to_string(r.runs_cancelled) +
+              " runs before their end once their outcome was moot (each listed with cancelled: true; none is a "
+              "bracket end)";
+  if (decided > 0)
+    skipped += std::string(skipped.empty() ? "this search ended " : "; it ended ") + std::to_string(decided) +
+               " perforating runs once the projectile was passing through (decided_passing: true; their residual "
+               "velocity is the speed then, about 1 m/s above a full run's)";
+  if (!skipped.empty()) j["skipped_note"] = skipped + "; the reference runs every run to its end";
   j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);
   j["error_note"] = r.error_note;
   j["wall_time_s"] = r.wall_time_s;

@@ -24,8 +24,9 @@ struct Shot {
   double residual_velocity_mps = 0;
   double energy_absorbed_J = 0;
   double perforation_time_s = -1;
-  std::string end_reason;  // perforated | rebounded | end_time | ...
-  bool decided = true;     // false: reached end_time neither perforated nor turned back
+  std::string end_reason;        // perforated | rebounded | end_time | ...
+  bool decided = true;           // false: reached end_time neither perforated nor turned back
+  bool decided_passing = false;  // perforated by solver.decide_passing's early decision (FastRules)
   double wall_time_s = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
   std::string purpose;   // bracket | bisect | fit
@@ -74,7 +75,25 @@ struct FastRules {
   // perforation below it. A probe that perforates moves the bracket down to it and the
   // search goes on there; the answer stands once every probe below it stopped.
   bool probe_below = true;
+  // Runs end as perforated once the projectile is passing through (the scene key
+  // solver.decide_passing, docs/MODEL.md §8): held only by yarns with no intact path to a
+  // clamp, and at its present drag it would travel further than the fabric's largest half-size
+  // before stopping. Near the limit a perforating run otherwise drags the free yarns through
+  // the weave for another millisecond at an almost constant speed.
+  bool decide_passing = true;
 };
+
+// The fast search's rules by name (--without, limit.json's rules): what each does.
+struct FastRuleInfo {
+  const char* name;
+  bool FastRules::*on;
+  const char* what;
+};
+const std::vector<FastRuleInfo>& fast_rule_table();
+// "ksection, cancel_moot, ...": the names, for messages and help.
+std::string fast_rule_names();
+// The scene overrides the rules ask of every run (decide_passing: solver.decide_passing=true).
+void add_rule_overrides(const FastRules& rules, std::vector<std::string>& overrides);
 struct LimitOptions {
   double start_mps = 100;  // first velocity tried
   double growth = 1.5;     // bracketing factor

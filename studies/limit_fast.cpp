@@ -204,6 +204,7 @@ class Engine {
     if (r.two_sided_start && jobs_ > 1) res_.rules.push_back("two_sided_start");
     if (r.reuse_fit_points && with_fit) res_.rules.push_back("reuse_fit_points");
     if (r.probe_below && opt.probe_count > 0) res_.rules.push_back("probe_below");
+    if (r.decide_passing) res_.rules.push_back("decide_passing");  // (the runner's scene: add_rule_overrides)
     res_.method = "fast";
     res_.jobs = jobs_;
     fit_done_.assign(opt.fit_factors.size(), false);

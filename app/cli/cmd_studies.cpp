@@ -167,10 +167,11 @@ namespace {
 
 // One run's outcome as the limit command prints it.
 std::string shot_outcome(const studies::Shot& s) {
-  std::string o = s.cancelled    ? "cancelled (" + s.cancel_reason + ")"
-                  : s.perforated ? "perforated"
-                  : s.decided    ? "stopped"
-                                 : "undecided at its end time (left out)";
+  std::string o = s.cancelled         ? "cancelled (" + s.cancel_reason + ")"
+                  : s.decided_passing ? "perforated (passing, decided at " + fmt1(s.perforation_time_s * 1e6) + " us)"
+                  : s.perforated      ? "perforated"
+                  : s.decided         ? "stopped"
+                                      : "undecided at its end time (left out)";
   if (s.perforated) o += ", residual " + fmt1(s.residual_velocity_mps) + " m/s";
   if (s.failed) o += " -- FAILED: " + s.error;
   return o;
@@ -288,24 +289,15 @@ int cmd_limit(const Args& args) {
       if (reference) throw UsageError("--without: the reference search has no rules to leave out");
       std::stringstream ss(it->second);
       for (std::string rule; std::getline(ss, rule, ',');) {
-        if (rule == "ksection")
-          lo.rules.ksection = false;
-        else if (rule == "cancel_moot")
-          lo.rules.cancel_moot = false;
-        else if (rule == "residual_guess")
-          lo.rules.residual_guess = false;
-        else if (rule == "two_sided_start")
-          lo.rules.two_sided_start = false;
-        else if (rule == "reuse_fit_points")
-          lo.rules.reuse_fit_points = false;
-        else if (rule == "probe_below")
-          lo.rules.probe_below = false;
-        else
+        bool known = false;
+        for (const auto& info : studies::fast_rule_table())
+          if (rule == info.name) lo.rules.*info.on = false, known = true;
+        if (!known)
           throw UsageError("--without: unknown rule '" + rule +
-                           "' (the fast search's rules: ksection, cancel_moot, residual_guess, two_sided_start, "
-                           "reuse_fit_points, probe_below)");
+                           "' (the fast search's rules: " + studies::fast_rule_names() + ")");
       }
     }
+    if (!reference) studies::add_rule_overrides(lo.rules, ov);
     prepare_output_dir(a.out_dir);
     install_signal_handlers();
     const bool verbose = progress_wanted(a);

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 
+#include "limit.h"
 #include "version.h"
 
 namespace ravel::app {
@@ -19,6 +20,13 @@ const CommandOption kThreads{"threads", "N", false,
                              "solver threads per run (default: the scene's solver.threads, 0 = one per core)"};
 const CommandOption kQuiet{"quiet", nullptr, false, "no progress lines"};
 const CommandOption kJobs{"jobs", "N", false, "runs at a time (default: one per core)"};
+
+// The --without help names the rules from the table the parser reads (studies::fast_rule_table).
+const std::string& without_help() {
+  static const std::string h = "the fast search without these of its rules (" + studies::fast_rule_names() +
+                               "; docs/studies.md), to measure what each saves";
+  return h;
+}
 
 std::vector<Command> make_table() {
   std::vector<Command> t;
@@ -103,9 +111,7 @@ std::vector<Command> make_table() {
                 {"reference", nullptr, false,
                  "the reference search: bisection, one run at a time, every run to its end (docs/studies.md); "
                  "default: the fast search, the same bracket guarantee"},
-                {"without", "RULE,...", false,
-                 "the fast search without these of its rules (ksection, cancel_moot, residual_guess, "
-                 "two_sided_start, reuse_fit_points, probe_below; docs/studies.md), to measure what each saves"},
+                {"without", "RULE,...", false, without_help().c_str()},
                 kQuiet}});
   t.push_back({"paper",
                "ravel paper --out DIR [options]",

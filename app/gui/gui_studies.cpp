@@ -58,6 +58,7 @@ bool LimitRunner::start(const std::string& scene_path, const std::vector<std::st
     std::vector<std::string> ov = overrides;
     ov.push_back("solver.end_time_us=auto");
     ov.push_back("solver.threads=1");
+    studies::add_rule_overrides(opt.rules, ov);  // as ravel limit does
     try {
       const std::vector<studies::Shot> prior = studies::kept_runs(scene_path, ov, out_dir);
       {

@@ -50,6 +50,7 @@ LimitOptions only(bool ksection, bool cancel, bool guess, bool two_sided, bool r
   o.rules.two_sided_start = two_sided;
   o.rules.reuse_fit_points = reuse;
   o.rules.probe_below = false;
+  o.rules.decide_passing = false;  // a scene rule: the synthetic runner has no scene
   return o;
 }
 
@@ -409,9 +410,16 @@ TEST(FastLimit, CheapSceneMatchesTheReference) {
   o.tolerance_mps = 1.0;
   const auto ref = find_ballistic_limit(scene_shooter("", ov), o, false);
   ASSERT_TRUE(ref.converged);
+  // The fast search's runs decide passing projectiles early (FastRules::decide_passing); the
+  // reference runs every run to its end.
+  add_rule_overrides(o.rules, ov);
+  ASSERT_EQ(ov.back(), "solver.decide_passing=true");
   o.jobs = 2;
   o.rules.probe_below = false;
   const auto f = find_ballistic_limit_fast(scene_runner("", ov), o, false);
+  int decided = 0;
+  for (const auto& s : f.runs) decided += s.decided_passing;
+  EXPECT_GT(decided, 0);
   for (const auto& w : f.warnings) ADD_FAILURE() << w;
   ASSERT_TRUE(f.converged);
   EXPECT_LE(f.hi_mps - f.lo_mps, 1.0);

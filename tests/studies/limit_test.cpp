@@ -326,6 +326,20 @@ TEST(BallisticLimit, LimitJsonStatesMethodAndErrorEstimate) {
   EXPECT_TRUE(j2.contains("skipped_note"));
   EXPECT_EQ(j2["runs"].back()["cancelled"], true);
   EXPECT_TRUE(limit_from_json(j2.dump()).runs.back().cancelled);
+  // A run decided as passing is a perforation not run to its end: said so, and round-trips.
+  LimitResult withd = r;
+  for (auto& s : withd.runs)
+    if (s.perforated) {
+      s.decided_passing = true;
+      break;
+    }
+  const auto j3 = nlohmann::json::parse(limit_json(withd, o, "s", {}));
+  EXPECT_EQ(j3["skipped_full_runs"], true);
+  EXPECT_EQ(j3["runs_decided_passing"], 1);
+  EXPECT_NE(j3["skipped_note"].get<std::string>().find("passing through"), std::string::npos);
+  int back_decided = 0;
+  for (const auto& s : limit_from_json(j3.dump()).runs) back_decided += s.decided_passing;
+  EXPECT_EQ(back_decided, 1);
 }
 
 }  // namespace

@@ -110,7 +110,10 @@ warned = [w for w in j["warnings"] if w.startswith("non-monotone")]
 assert bl >= rbl - 2.0 or warned, (bl, rbl, j["warnings"])
 assert any(r["name"] == "probe_below" for r in j["rules"]), j["rules"]
 cancelled = [r for r in j["runs"] if r.get("cancelled")]
-assert len(cancelled) == j["runs_cancelled"] and j["skipped_full_runs"] == (len(cancelled) > 0), j
+decided = [r for r in j["runs"] if r.get("decided_passing")]
+assert all(r["perforated"] for r in decided), decided
+assert j["runs_decided_passing"] == len(decided), j
+assert len(cancelled) == j["runs_cancelled"] and j["skipped_full_runs"] == (len(cancelled) + len(decided) > 0), j
 for r in j["runs"]:
     if r.get("cancelled"):
         assert not r["decided"] and r["cancel_reason"] and r["velocity_mps"] not in (lo, hi), r
