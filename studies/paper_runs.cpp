@@ -232,10 +232,11 @@ void run_limit_stage(PaperState& ps) {
       e.dir = opt.out_dir + "/limit/" + label;
       std::vector<std::string> ov = ps.with(plan.limit_overrides);
       ov.push_back("solver.end_time_us=auto");
-      // Perforating runs end once the projectile is passing through (MODEL.md §8): a search
-      // uses outcomes only, and the decision changed none in the cases measured, so the
-      // bisection takes the same path and finds the same limit with fewer steps.
-      ov.push_back("solver.decide_passing=true");
+      // The scene rules of the fast search (decide_passing: perforating runs end once the
+      // projectile is passing through, MODEL.md §8): a search uses outcomes only, and the
+      // decision changed none in the cases measured, so the bisection takes the same path and
+      // finds the same limit with fewer steps.
+      add_rule_overrides(lo.rules, ov);
       for (const auto& o : e.overrides) ov.push_back(o);
       try {
         prepare_output_dir(e.dir);
