@@ -49,7 +49,7 @@ using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpo
 using RunFn = std::function<Shot(double velocity_mps, const std::string& purpose, const std::atomic<bool>* stop)>;
 
 // The fast search's rules (docs/studies.md, "The fast search"). Each can be turned off to
-// measure what it saves (`ravel tradeoff --limit`, bench/limit_speed); none of them moves
+// measure what it saves (`ravel tradeoff --searches`, bench/limit_speed); none of them moves
 // the bracket's guarantee: its ends are always full runs that stopped / perforated.
 struct FastRules {
   // Several runs in flight (LimitOptions::jobs): when every slot is free the bracket is cut

@@ -250,7 +250,7 @@ void fill_row_from_case(TradeoffRow& row, const std::string& dir) {
 
 TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<bool>* interrupt) {
   TradeoffOptions opt = opt_in;
-  if (opt.knobs.empty()) opt.knobs = default_tradeoff_knobs();
+  if (opt.knobs.empty() && !opt.searches_only) opt.knobs = default_tradeoff_knobs();
   const auto t0 = std::chrono::steady_clock::now();
   const Scene base = load_scene(opt.scene_path, opt.overrides);
   TradeoffResult res;
@@ -378,6 +378,12 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt_in, const std::atomic<boo
     run_queue(cases.size(), opt.jobs, interrupt, search);
     for (auto& row : res.rows)
       if (bl.count(row.case_name)) row.value_q[q_ballistic_limit] = bl[row.case_name];
+    if (interrupt && interrupt->load()) res.interrupted = true;
+  }
+
+  // The ballistic-limit searches, each with the machine to itself (after every other run).
+  if (opt.searches && !res.interrupted) {
+    res.searches = run_limit_searches(opt, interrupt, &res.warnings);
     if (interrupt && interrupt->load()) res.interrupted = true;
   }
 
@@ -543,6 +549,29 @@ std::string tradeoff_json(const TradeoffResult& r, const TradeoffOptions& opt) {
     }
     j["cheapest"][k.key] = kj;
   }
+  if (!r.searches.empty()) {
+    j["searches"] = ojson::array();
+    for (const auto& q : r.searches) {
+      ojson o;
+      o["search"] = q.name;
+      o["rule_left_out"] = q.rule.empty() ? ojson(nullptr) : ojson(q.rule);
+      o["status"] = q.status;
+      if (!q.note.empty()) o["note"] = q.note;
+      o["wall_time_s"] = jnum(q.wall_time_s);
+      o["time_vs_reference"] = jnum(q.time_ratio);
+      o["rule_saves_s"] = jnum(q.rule_saves_s);
+      o["runs"] = q.runs;
+      o["runs_cancelled"] = q.runs_cancelled;
+      o["rounds"] = q.rounds;
+      o["runs_decided_passing"] = q.runs_decided_passing;
+      o["ballistic_limit_mps"] = jnum(q.ballistic_limit_mps);
+      o["bracket_mps"] = {jnum(q.lo_mps), jnum(q.hi_mps)};
+      o["error_estimate_mps"] = jnum(q.error_mps);
+      o["diff_from_reference_mps"] = jnum(q.diff_mps);
+      o["kept"] = q.kept;
+      j["searches"].push_back(o);
+    }
+  }
   j["warnings"] = r.warnings;
   return j.dump(2) + "\n";
 }
@@ -575,27 +604,29 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
           cell(ref.cost_s, "%.2f") + " s.\n\n";
   }
   const int nq = quantity_count(r);
-  md += "## Verdict: the cheapest setting within 1 % / 5 % of the reference\n\n| knob |";
-  for (int q = 0; q < nq; ++q) md += std::string(" ") + quantity_words(q) + " |";
-  md += "\n|---|";
-  for (int q = 0; q < nq; ++q) md += "---|";
-  md += "\n";
-  std::vector<std::string> knobs;
-  for (const auto& k : opt.knobs) knobs.push_back(k.key);
-  knobs.push_back("");
-  for (const auto& k : knobs) {
-    md += "| " + (k.empty() ? std::string("**any row**") : "`" + k + "`") + " |";
-    for (int q = 0; q < nq; ++q) {
-      std::string c;
-      for (double tol : kTolerances) {
-        const auto e = cheapest_within(r, k, q, tol);
-        c += (c.empty() ? "" : " / ") + (e.found ? (k.empty() ? short_knob(e.knob) + "=" : std::string()) + e.value +
-                                                       " (" + cell(e.cost_s, "%.3g") + " s)"
-                                                 : std::string("none"));
-      }
-      md += " " + c + " |";
-    }
+  if (!opt.searches_only) {  // (with no knob rows there is nothing to choose between)
+    md += "## Verdict: the cheapest setting within 1 % / 5 % of the reference\n\n| knob |";
+    for (int q = 0; q < nq; ++q) md += std::string(" ") + quantity_words(q) + " |";
+    md += "\n|---|";
+    for (int q = 0; q < nq; ++q) md += "---|";
     md += "\n";
+    std::vector<std::string> knobs;
+    for (const auto& k : opt.knobs) knobs.push_back(k.key);
+    knobs.push_back("");
+    for (const auto& k : knobs) {
+      md += "| " + (k.empty() ? std::string("**any row**") : "`" + k + "`") + " |";
+      for (int q = 0; q < nq; ++q) {
+        std::string c;
+        for (double tol : kTolerances) {
+          const auto e = cheapest_within(r, k, q, tol);
+          c += (c.empty() ? "" : " / ") + (e.found ? (k.empty() ? short_knob(e.knob) + "=" : std::string()) + e.value +
+                                                         " (" + cell(e.cost_s, "%.3g") + " s)"
+                                                   : std::string("none"));
+        }
+        md += " " + c + " |";
+      }
+      md += "\n";
+    }
   }
   md += "\n## Every setting\n\n| knob | value | status | wall s | CPU s | node-steps/s |";
   for (int q = 0; q < nq; ++q) md += std::string(" ") + quantity_words(q) + " error |";
@@ -608,6 +639,7 @@ std::string tradeoff_markdown(const TradeoffResult& r, const TradeoffOptions& op
     for (int q = 0; q < nq; ++q) md += " " + pct(row.error[q]) + " |";
     md += "\n";
   }
+  if (!r.searches.empty()) md += searches_markdown(r.searches, opt);
   if (!r.warnings.empty()) {
     md += "\n## Warnings\n\n";
     for (const auto& w : r.warnings) md += "- " + w + "\n";

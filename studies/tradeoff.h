@@ -84,11 +84,34 @@ struct TradeoffOptions {
   std::string cost = "wall";  // wall | cpu: the cost the verdict and charts use
   int jobs = 1;
   int solver_threads = 1;
-  bool limit = false;                                        // also the ballistic limit of every setting
-  LimitOptions limit_options;                                // tolerance etc. (start: 100 m/s)
+  bool limit = false;          // also the ballistic limit of every setting
+  LimitOptions limit_options;  // tolerance etc. (start: 100 m/s)
+  // The ballistic-limit searches compared (--searches): on the scene's own settings, the
+  // reference search, the fast search, and the fast search without each rule named here
+  // (fast_rule_table names). `searches` false: none.
+  bool searches = false;
+  std::vector<std::string> search_rules;
+  bool searches_only = false;                                // no knob rows (only the reference run and the searches)
   std::string date;                                          // YYYY-MM-DD written into tradeoff.json ("" = today)
   std::string note;                                          // free text (machine load, quick mode) for tradeoff.json
   std::function<void(const std::string& what)> on_progress;  // one line per finished run
+};
+
+// One ballistic-limit search of the --searches comparison: what it found and what it cost.
+struct SearchRow {
+  std::string name;    // reference | fast | without <rule>
+  std::string rule;    // the rule left out ("" for the reference and the fast search)
+  std::string status;  // converged | not converged | failed | interrupted
+  std::string note;    // the error, or why it did not converge
+  double wall_time_s = NAN;
+  int runs = 0, runs_cancelled = 0, rounds = 0, runs_decided_passing = 0;
+  double ballistic_limit_mps = NAN, lo_mps = NAN, hi_mps = NAN;
+  double error_mps = NAN;  // the search's own error estimate (limit.json's error_mps)
+  double diff_mps = NAN;   // ballistic_limit_mps minus the reference search's
+  // The fast search's wall time minus this one's (a `without` row: what the rule saved; < 0:
+  // it cost), and this search's wall time over the reference's.
+  double rule_saves_s = NAN, time_ratio = NAN;
+  bool kept = false;  // read back from DIR/search/<name>/limit.json, not searched now
 };
 
 struct TradeoffVerdictEntry {
@@ -105,11 +128,27 @@ struct TradeoffResult {
   int runs = 0, runs_skipped = 0;
   bool interrupted = false;
   std::vector<std::string> warnings;
+  std::vector<SearchRow> searches;  // --searches: [0] the reference search, [1] the fast one
 };
 
 // Run (or resume) every setting; writes DIR/cases/... and returns the rows. The caller
 // writes the outputs with the functions below (run_tradeoff does not).
 TradeoffResult run_tradeoff(const TradeoffOptions& opt, const std::atomic<bool>* interrupt = nullptr);
+
+// The searches of --searches, one after another on the machine's opt.jobs cores (each
+// search has the machine to itself, so their wall times compare): the reference (one run at
+// a time, opt.jobs solver threads), the fast search (opt.jobs runs in flight, one thread
+// each) and the fast search without each of opt.search_rules, all with the Lambert-Jonas
+// fit as `ravel limit` makes it. Each is kept as DIR/search/<name>/limit.json and read back on
+// a rerun; a search cut short by an interruption is made again from its start (a resumed
+// search's time would not be its cost). Called by run_tradeoff.
+std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std::atomic<bool>* interrupt,
+                                          std::vector<std::string>* warnings);
+// The rows' table (searches.csv), their section of tradeoff.md, and the chart (difference from
+// the reference's limit against wall time).
+std::string searches_csv(const std::vector<SearchRow>& rows);
+std::string searches_markdown(const std::vector<SearchRow>& rows, const TradeoffOptions& opt);
+Chart searches_chart(const std::vector<SearchRow>& rows, const TradeoffOptions& opt, const std::string& scene_name);
 
 // The cheapest row of `knob` ("" = any row) whose error in quantity q is within tol.
 TradeoffVerdictEntry cheapest_within(const TradeoffResult& r, const std::string& knob, int q, double tol);

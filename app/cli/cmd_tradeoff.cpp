@@ -1,7 +1,7 @@
 // Speed against accuracy and where the methods fail (docs/tradeoff.md):
 //   ravel tradeoff  [SCENE] [--set k=v ...] --out DIR [--quick] [--knob KEY=v1,v2 ...] [--only KEY,KEY]
 //                   [--reference KEY=VALUE ...] [--around scene|reference] [--cost wall|cpu] [--limit]
-//                   [--jobs N] [--threads N] [--note TEXT] [--date YYYY-MM-DD]
+//                   [--searches all|none|RULE,...] [--jobs N] [--threads N] [--note TEXT] [--date YYYY-MM-DD]
 //   ravel stability [SCENE] [--set k=v ...] --out DIR [--quick] [--map NAME ...] [--jobs N] [--threads N]
 // The logic lives in studies/tradeoff.* and studies/stability.*; this file parses flags and prints.
 #include <unistd.h>
@@ -67,9 +67,32 @@ int cmd_tradeoff(const Args& args) {
       for (auto& kn : opt.knobs)
         if (kn.key == v.key) kn.values = v.values;
     }
+    if (a.flags.count("searches")) {
+      // --searches RULES: the reference and the fast ballistic-limit searches, and the fast
+      // search without each rule named ("all": every rule, "none": no rule left out).
+      opt.searches = true;
+      const std::string list = a.flags["searches"];
+      if (list == "all") {
+        for (const auto& info : studies::fast_rule_table()) opt.search_rules.push_back(info.name);
+      } else if (list != "none") {
+        for (const auto& rule : split(list, ',')) {
+          bool known = false;
+          for (const auto& info : studies::fast_rule_table()) known = known || rule == info.name;
+          if (!known)
+            throw UsageError("--searches: unknown rule '" + rule +
+                             "' (all, none, or some of: " + studies::fast_rule_names() + ")");
+          opt.search_rules.push_back(rule);
+        }
+      }
+    }
     if (a.flags.count("only")) {
       std::vector<studies::TradeoffKnob> keep;
       for (const auto& key : split(a.flags["only"], ',')) {
+        if (key == "searches") {  // no knob rows: the searches alone (and the reference run)
+          if (!opt.searches) throw UsageError("--only searches: needs --searches");
+          opt.searches_only = true;
+          continue;
+        }
         bool found = false;
         for (const auto& kn : opt.knobs)
           if (kn.key == key || kn.key.substr(kn.key.find('.') + 1) == key) keep.push_back(kn), found = true;
@@ -115,6 +138,10 @@ int cmd_tradeoff(const Args& args) {
     write_file_atomic(opt.out_dir + "/tradeoff.md", studies::tradeoff_markdown(r, opt));
     for (const auto& [stem, chart] : studies::tradeoff_charts(r, opt))
       studies::write_chart(chart, opt.out_dir + "/" + stem);
+    if (!r.searches.empty()) {
+      write_file_atomic(opt.out_dir + "/searches.csv", studies::searches_csv(r.searches));
+      studies::write_chart(studies::searches_chart(r.searches, opt, r.scene_name), opt.out_dir + "/tradeoff_searches");
+    }
     // The verdict.
     std::printf("tradeoff: %d runs (%d already finished) in %.0f s\n", r.runs, r.runs_skipped, r.wall_time_s);
     if (!r.rows.empty())
@@ -124,10 +151,12 @@ int cmd_tradeoff(const Args& args) {
                                [](const auto& x) { return !std::isnan(x.value_q[studies::q_ballistic_limit]); })
                        ? 4
                        : 3;
-    std::printf("  cheapest setting within 1 %% / 5 %% of the reference (%s cost):\n", opt.cost.c_str());
     std::vector<std::string> knobs;
     for (const auto& k : opt.knobs) knobs.push_back(k.key);
-    knobs.push_back("");
+    if (!opt.searches_only) {
+      std::printf("  cheapest setting within 1 %% / 5 %% of the reference (%s cost):\n", opt.cost.c_str());
+      knobs.push_back("");
+    }
     for (const auto& k : knobs) {
       std::printf("    %-27s", k.empty() ? "any knob" : k.c_str());
       for (int q = 0; q < nq; ++q) {
@@ -145,6 +174,21 @@ int cmd_tradeoff(const Args& args) {
         std::printf("  %s: %-18s", studies::quantity_words(q), cellv.c_str());
       }
       std::printf("\n");
+    }
+    if (!r.searches.empty()) {
+      std::printf("  ballistic-limit searches (tolerance %.3g m/s):\n", opt.limit_options.tolerance_mps);
+      for (const auto& q : r.searches) {
+        if (std::isnan(q.ballistic_limit_mps))
+          std::printf("    %-27s %s", q.name.c_str(), q.status.c_str());
+        else
+          std::printf("    %-27s %.2f m/s", q.name.c_str(), q.ballistic_limit_mps);
+        if (!std::isnan(q.diff_mps) && q.name != "reference") std::printf(" (%+.2f from the reference)", q.diff_mps);
+        std::printf(", %d runs, %.0f s", q.runs, q.wall_time_s);
+        if (!std::isnan(q.rule_saves_s)) std::printf("; the rule saves %+.0f s", q.rule_saves_s);
+        std::printf("%s\n", q.kept ? " (kept)" : "");
+      }
+      std::printf("  %s/searches.csv, %s/tradeoff_searches.{png,svg,csv}, %s/search/\n", opt.out_dir.c_str(),
+                  opt.out_dir.c_str(), opt.out_dir.c_str());
     }
     for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     std::printf("  %s/tradeoff.{csv,json,md}, %s/tradeoff_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());

@@ -141,12 +141,16 @@ std::vector<Command> make_table() {
                 kJobs,
                 {"quick", nullptr, false, "fewer values per knob"},
                 {"knob", "KEY=V1,V2,...", true, "replace one knob's values (repeatable)"},
-                {"only", "KEY[,KEY...]", false, "only these knobs"},
+                {"only", "KEY[,KEY...]", false, "only these knobs ('searches' alone: none, with --searches)"},
                 {"reference", "KEY=VALUE", true, "the reference's value of a knob (default: its finest)"},
                 {"around", "scene|reference", false, "vary each knob around the scene (default) or the reference"},
                 {"cost", "wall|cpu", false, "cost measure (default wall)"},
                 {"limit", nullptr, false, "also the ballistic limit of every setting"},
-                {"tolerance", "MPS", false, "ballistic-limit tolerance with --limit (default 1 m/s)"},
+                {"tolerance", "MPS", false, "ballistic-limit tolerance with --limit or --searches (default 1 m/s)"},
+                {"searches", "all|none|RULE,...", false,
+                 "also the ballistic-limit searches on the scene's settings, one after another: the reference, "
+                 "the fast search, and the fast search without each rule named (searches.csv; --only searches: "
+                 "no knob rows)"},
                 {"note", "TEXT", false, "a note recorded with the results"},
                 {"date", "YYYY-MM-DD", false, "the date recorded (default today)"},
                 kQuiet}});

@@ -140,4 +140,49 @@ PY
 out=$("$RAVEL" limit "${CHEAP[@]}" --without guess --out "$WORK/limit_bad" 2>&1)
 [[ $? == 2 ]] && grep -q "unknown rule 'guess'" <<<"$out" || fail "limit --without guess: $out"
 
+# tradeoff --searches: the reference search, the fast one and the fast one without a rule,
+# one after another; searches.csv, tradeoff.json and the chart; a rerun keeps them. The
+# reference row is `ravel limit --reference` at the same settings (the same runs: the
+# reference search is deterministic and the solver's threads do not change a result).
+"$RAVEL" limit "${CHEAP[@]}" --tolerance 2 --reference --no-fit --out "$WORK/limit_ref100" >/dev/null 2>&1 ||
+  fail "limit --reference (start 100) failed"
+"$RAVEL" tradeoff "${CHEAP[@]}" --only searches --searches decide_passing --tolerance 2 --jobs 2 \
+  --out "$WORK/to_search" >"$WORK/to_search.out" 2>&1 || fail "tradeoff --searches: $(cat "$WORK/to_search.out")"
+for f in searches.csv tradeoff.json tradeoff.md tradeoff_searches.png tradeoff_searches.svg tradeoff_searches.csv \
+  search/reference/limit.json search/fast/limit.json search/decide_passing/limit.json; do
+  [[ -s $WORK/to_search/$f ]] || fail "tradeoff --searches: $f missing"
+done
+/usr/bin/python3 - "$WORK/to_search" "$WORK/limit_ref100/limit.json" <<'PY' || fail "tradeoff --searches values"
+import csv, json, sys
+d, ref_path = sys.argv[1], sys.argv[2]
+rows = list(csv.DictReader(open(d + "/searches.csv")))
+assert [r["search"] for r in rows] == ["reference", "fast", "without decide_passing"], rows
+ref = json.load(open(ref_path))
+r0 = rows[0]
+assert abs(float(r0["ballistic_limit_mps"]) - ref["ballistic_limit_mps"]) < 1e-3, (r0, ref["ballistic_limit_mps"])
+assert float(r0["diff_from_reference_mps"]) == 0 and float(r0["time_vs_reference"]) == 1
+for r in rows:
+    assert r["status"] == "converged", r
+    lo, hi = float(r["bracket_lo_mps"]), float(r["bracket_hi_mps"])
+    assert hi - lo <= 2 + 1e-9 and lo <= float(r["ballistic_limit_mps"]) <= hi, r
+    assert abs(float(r["diff_from_reference_mps"]) - (float(r["ballistic_limit_mps"]) - float(r0["ballistic_limit_mps"]))) < 2e-3, r
+# Passing decided only where the rule is on; the rule's saving is the two searches' difference.
+assert int(rows[0]["runs_decided_passing"]) == 0 and int(rows[2]["runs_decided_passing"]) == 0, rows
+assert abs(float(rows[2]["rule_saves_s"]) - (float(rows[2]["wall_time_s"]) - float(rows[1]["wall_time_s"]))) < 0.11, rows
+j = json.load(open(d + "/tradeoff.json"))
+assert [q["search"] for q in j["searches"]] == [r["search"] for r in rows], j["searches"]
+assert j["searches"][2]["rule_left_out"] == "decide_passing"
+fast = json.load(open(d + "/search/fast/limit.json"))
+assert fast["method"] == "fast" and "decide_passing" in [q["name"] for q in fast["rules"]], fast["method"]
+without = json.load(open(d + "/search/decide_passing/limit.json"))
+assert "decide_passing" not in [q["name"] for q in without["rules"]]
+PY
+grep -q "## Ballistic-limit searches" "$WORK/to_search/tradeoff.md" || fail "tradeoff.md lacks the searches section"
+grep -q "## Verdict" "$WORK/to_search/tradeoff.md" && fail "tradeoff.md: a verdict with no knob rows"
+out=$("$RAVEL" tradeoff "${CHEAP[@]}" --only searches --searches decide_passing --tolerance 2 --jobs 2 \
+  --out "$WORK/to_search" 2>&1) || fail "tradeoff --searches rerun: $out"
+[[ $(grep -c "kept from an earlier run" <<<"$out") == 3 ]] || fail "tradeoff --searches rerun searched again: $out"
+expect_refused to_bad_rule "--searches: unknown rule 'guess'" tradeoff --searches guess
+expect_refused to_only_searches "--only searches: needs --searches" tradeoff --only searches
+
 if [[ $fails == 0 ]]; then echo "studies CLI: all passed"; else echo "studies CLI: $fails failed"; exit 1; fi
