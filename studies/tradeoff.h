@@ -108,8 +108,8 @@ struct SearchRow {
   double ballistic_limit_mps = NAN, lo_mps = NAN, hi_mps = NAN;
   double error_mps = NAN;  // the search's own error estimate (limit.json's error_mps)
   double diff_mps = NAN;   // ballistic_limit_mps minus the reference search's
-  // The fast search's wall time minus this one's (a `without` row: what the rule saved; < 0:
-  // it cost), and this search's wall time over the reference's.
+  // This search's wall time minus the fast search's (a `without` row: what the rule saved;
+  // < 0: it cost), and this search's wall time over the reference's.
   double rule_saves_s = NAN, time_ratio = NAN;
   bool kept = false;  // read back from DIR/search/<name>/limit.json, not searched now
 };

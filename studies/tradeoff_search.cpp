@@ -48,8 +48,10 @@ SearchRow row_from(const LimitResult& r, const std::string& name, const std::str
   if (r.error_mps >= 0) row.error_mps = r.error_mps;
   row.status = r.interrupted ? "interrupted" : r.converged ? "converged" : "not converged";
   if (!r.converged && !r.warnings.empty()) row.note = r.warnings.back();
+  // A failed run spoils a search only when it was part of the bracket (both searches leave a
+  // failed fit run out of the fit).
   for (const auto& s : r.runs)
-    if (s.failed) row.status = "failed", row.note = s.error;
+    if (s.failed && s.purpose != "fit" && !r.converged) row.status = "failed", row.note = s.error;
   return row;
 }
 
@@ -86,8 +88,16 @@ std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std:
     if (!p.reference) add_rule_overrides(lo.rules, ov);
     if (fs::exists(path)) {
       try {
-        const LimitResult kept = limit_from_json(read_text_file(path));
-        if (!kept.interrupted) {
+        const std::string text = read_text_file(path);
+        const LimitResult kept = limit_from_json(text);
+        // Only a search made with the same scene, overrides (the threads and rules among
+        // them), tolerance and start stands for this one; any other is searched again.
+        const auto j = nlohmann::json::parse(text);
+        const bool same = j.value("scene", "") == opt.scene_path &&
+                          j.value("overrides", std::vector<std::string>{}) == ov &&
+                          j.value("tolerance_mps", -1.0) == lo.tolerance_mps &&
+                          j.value("start_mps", -1.0) == lo.start_mps && j.value("jobs", 0) == lo.jobs;
+        if (!kept.interrupted && same) {
           SearchRow row = row_from(kept, p.name, p.rule);
           row.kept = true;
           rows.push_back(row);
@@ -118,7 +128,7 @@ std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std:
       if (warnings) warnings->push_back("search " + p.name + ": " + e.what());
       continue;
     }
-    if (r.interrupted || (interrupt && interrupt->load())) break;
+    if (r.interrupted) break;  // (a finished search is kept even if the interruption came after it)
     // The whole search as the user waits for it (the fast search's own clock starts with its
     // first run; the reference's is the sum of its runs).
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -140,7 +150,9 @@ std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std:
   }
   for (auto& r : rows) {
     if (ref) {
-      r.diff_mps = r.ballistic_limit_mps - ref->ballistic_limit_mps;
+      // Distances only between converged searches (a bracket that never closed is no answer).
+      if (r.status == "converged" && ref->status == "converged")
+        r.diff_mps = r.ballistic_limit_mps - ref->ballistic_limit_mps;
       r.time_ratio = r.wall_time_s / ref->wall_time_s;
     }
     if (fast && !r.rule.empty()) r.rule_saves_s = r.wall_time_s - fast->wall_time_s;

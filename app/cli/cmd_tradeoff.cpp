@@ -81,7 +81,8 @@ int cmd_tradeoff(const Args& args) {
           if (!known)
             throw UsageError("--searches: unknown rule '" + rule +
                              "' (all, none, or some of: " + studies::fast_rule_names() + ")");
-          opt.search_rules.push_back(rule);
+          if (std::find(opt.search_rules.begin(), opt.search_rules.end(), rule) == opt.search_rules.end())
+            opt.search_rules.push_back(rule);
         }
       }
     }
@@ -90,7 +91,6 @@ int cmd_tradeoff(const Args& args) {
       for (const auto& key : split(a.flags["only"], ',')) {
         if (key == "searches") {  // no knob rows: the searches alone (and the reference run)
           if (!opt.searches) throw UsageError("--only searches: needs --searches");
-          opt.searches_only = true;
           continue;
         }
         bool found = false;
@@ -99,6 +99,7 @@ int cmd_tradeoff(const Args& args) {
         if (!found) throw UsageError("--only " + key + ": not a speed/accuracy knob");
       }
       opt.knobs = keep;
+      opt.searches_only = keep.empty();
     }
     for (const auto& r : a.multi["reference"]) {
       // --reference KEY=VALUE: the reference's value of a knob, instead of the finest.
@@ -129,8 +130,9 @@ int cmd_tradeoff(const Args& args) {
     const auto r = studies::run_tradeoff(opt, &interrupt_flag());
     if (r.interrupted) {
       std::fprintf(stderr,
-                   "ravel: interrupted; finished runs are kept in %s/cases/ (rerun the same command to resume)\n",
-                   opt.out_dir.c_str());
+                   "ravel: interrupted; finished runs are kept in %s/cases/ and finished searches in %s/search/ "
+                   "(rerun the same command to resume)\n",
+                   opt.out_dir.c_str(), opt.out_dir.c_str());
       return exit_interrupted;
     }
     write_file_atomic(opt.out_dir + "/tradeoff.csv", studies::tradeoff_csv(r));
@@ -183,7 +185,8 @@ int cmd_tradeoff(const Args& args) {
         else
           std::printf("    %-27s %.2f m/s", q.name.c_str(), q.ballistic_limit_mps);
         if (!std::isnan(q.diff_mps) && q.name != "reference") std::printf(" (%+.2f from the reference)", q.diff_mps);
-        std::printf(", %d runs, %.0f s", q.runs, q.wall_time_s);
+        std::printf(", %d runs", q.runs);
+        if (!std::isnan(q.wall_time_s)) std::printf(", %.0f s", q.wall_time_s);
         if (!std::isnan(q.rule_saves_s)) std::printf("; the rule saves %+.0f s", q.rule_saves_s);
         std::printf("%s\n", q.kept ? " (kept)" : "");
       }
@@ -192,7 +195,12 @@ int cmd_tradeoff(const Args& args) {
     }
     for (const auto& w : r.warnings) std::fprintf(stderr, "ravel: warning: %s\n", w.c_str());
     std::printf("  %s/tradeoff.{csv,json,md}, %s/tradeoff_*.{png,svg,csv}\n", opt.out_dir.c_str(), opt.out_dir.c_str());
-    return r.rows.empty() || r.rows[0].status == "failed" || r.rows[0].status == "missing" ? exit_failure : exit_ok;
+    // A failed search (the reference's or another's) fails the command as a failed reference run does.
+    const bool search_failed = std::any_of(r.searches.begin(), r.searches.end(),
+                                           [](const studies::SearchRow& q) { return q.status == "failed"; });
+    return r.rows.empty() || r.rows[0].status == "failed" || r.rows[0].status == "missing" || search_failed
+               ? exit_failure
+               : exit_ok;
   } catch (const std::exception& e) {
     return report_error(e);
   }
