@@ -469,6 +469,15 @@ void add_rule_overrides(const FastRules& rules, std::vector<std::string>& overri
   if (rules.decide_passing) overrides.push_back("solver.decide_passing=true");
 }
 
+bool leave_out_rule(FastRules& rules, const std::string& name) {
+  for (const auto& info : fast_rule_table())
+    if (name == info.name) {
+      rules.*info.on = false;
+      return true;
+    }
+  return false;
+}
+
 std::string fast_rule_names() {
   std::string out;
   for (const auto& r : fast_rule_table()) out += (out.empty() ? "" : ", ") + std::string(r.name);

@@ -92,6 +92,8 @@ struct FastRuleInfo {
 const std::vector<FastRuleInfo>& fast_rule_table();
 // "ksection, cancel_moot, ...": the names, for messages and help.
 std::string fast_rule_names();
+// Turn the rule named `name` off in `rules`; false (nothing changed) for a name not in the table.
+bool leave_out_rule(FastRules& rules, const std::string& name);
 // The scene overrides the rules ask of every run (decide_passing: solver.decide_passing=true).
 void add_rule_overrides(const FastRules& rules, std::vector<std::string>& overrides);
 struct LimitOptions {

@@ -101,7 +101,7 @@ struct TradeoffOptions {
 struct SearchRow {
   std::string name;    // reference | fast | without <rule>
   std::string rule;    // the rule left out ("" for the reference and the fast search)
-  std::string status;  // converged | not converged | failed | interrupted
+  std::string status;  // converged | not converged | failed
   std::string note;    // the error, or why it did not converge
   double wall_time_s = NAN;
   int runs = 0, runs_cancelled = 0, rounds = 0, runs_decided_passing = 0;
@@ -111,7 +111,7 @@ struct SearchRow {
   // This search's wall time minus the fast search's (a `without` row: what the rule saved;
   // < 0: it cost), and this search's wall time over the reference's.
   double rule_saves_s = NAN, time_ratio = NAN;
-  bool kept = false;  // read back from DIR/search/<name>/limit.json, not searched now
+  bool kept = false;  // read back from DIR/search/{reference,fast,<rule>}/limit.json, not searched now
 };
 
 struct TradeoffVerdictEntry {
@@ -139,9 +139,9 @@ TradeoffResult run_tradeoff(const TradeoffOptions& opt, const std::atomic<bool>*
 // search has the machine to itself, so their wall times compare): the reference (one run at
 // a time, opt.jobs solver threads), the fast search (opt.jobs runs in flight, one thread
 // each) and the fast search without each of opt.search_rules, all with the Lambert-Jonas
-// fit as `ravel limit` makes it. Each is kept as DIR/search/<name>/limit.json and read back on
-// a rerun; a search cut short by an interruption is made again from its start (a resumed
-// search's time would not be its cost). Called by run_tradeoff.
+// fit as `ravel limit` makes it. Each is kept as DIR/search/{reference,fast,<rule>}/limit.json
+// and read back on a rerun made with the same scene, overrides, tolerance and jobs; a search cut short by an
+// interruption is made again from its start (a resumed search's time would not be its cost). Called by run_tradeoff.
 std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std::atomic<bool>* interrupt,
                                           std::vector<std::string>* warnings);
 // The rows' table (searches.csv), their section of tradeoff.md, and the chart (difference from

@@ -46,7 +46,7 @@ SearchRow row_from(const LimitResult& r, const std::string& name, const std::str
     row.hi_mps = r.hi_mps;
   }
   if (r.error_mps >= 0) row.error_mps = r.error_mps;
-  row.status = r.interrupted ? "interrupted" : r.converged ? "converged" : "not converged";
+  row.status = r.converged ? "converged" : "not converged";  // (an interrupted search is never kept)
   if (!r.converged && !r.warnings.empty()) row.note = r.warnings.back();
   // A failed run spoils a search only when it was part of the bracket (both searches leave a
   // failed fit run out of the fit).
@@ -69,17 +69,13 @@ std::vector<SearchRow> run_limit_searches(const TradeoffOptions& opt, const std:
   std::vector<SearchRow> rows;
   for (const auto& p : plan) {
     if (interrupt && interrupt->load()) break;
-    const std::string dir = opt.out_dir + "/search/" + (p.reference ? p.name : p.rule.empty() ? p.name : p.rule);
+    const std::string dir = opt.out_dir + "/search/" + (p.rule.empty() ? p.name : p.rule);
     const std::string path = dir + "/limit.json";
     LimitOptions lo = opt.limit_options;
     lo.jobs = p.reference ? 1 : std::max(1, opt.jobs);
     lo.rules = FastRules{};
-    if (!p.rule.empty()) {
-      bool known = false;
-      for (const auto& info : fast_rule_table())
-        if (p.rule == info.name) lo.rules.*info.on = false, known = true;
-      if (!known) throw std::runtime_error("--searches: unknown rule '" + p.rule + "' (" + fast_rule_names() + ")");
-    }
+    if (!p.rule.empty() && !leave_out_rule(lo.rules, p.rule))
+      throw std::runtime_error("--searches: unknown rule '" + p.rule + "' (" + fast_rule_names() + ")");
     std::vector<std::string> ov = opt.overrides;
     // The reference runs one run at a time on every core the fast search uses; the fast
     // search one thread per run, jobs runs at once (as `ravel limit` does).

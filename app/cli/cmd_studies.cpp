@@ -289,10 +289,7 @@ int cmd_limit(const Args& args) {
       if (reference) throw UsageError("--without: the reference search has no rules to leave out");
       std::stringstream ss(it->second);
       for (std::string rule; std::getline(ss, rule, ',');) {
-        bool known = false;
-        for (const auto& info : studies::fast_rule_table())
-          if (rule == info.name) lo.rules.*info.on = false, known = true;
-        if (!known)
+        if (!studies::leave_out_rule(lo.rules, rule))
           throw UsageError("--without: unknown rule '" + rule +
                            "' (the fast search's rules: " + studies::fast_rule_names() + ")");
       }

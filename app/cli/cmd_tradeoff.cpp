@@ -76,9 +76,8 @@ int cmd_tradeoff(const Args& args) {
         for (const auto& info : studies::fast_rule_table()) opt.search_rules.push_back(info.name);
       } else if (list != "none") {
         for (const auto& rule : split(list, ',')) {
-          bool known = false;
-          for (const auto& info : studies::fast_rule_table()) known = known || rule == info.name;
-          if (!known)
+          studies::FastRules scratch;
+          if (!studies::leave_out_rule(scratch, rule))
             throw UsageError("--searches: unknown rule '" + rule +
                              "' (all, none, or some of: " + studies::fast_rule_names() + ")");
           if (std::find(opt.search_rules.begin(), opt.search_rules.end(), rule) == opt.search_rules.end())
