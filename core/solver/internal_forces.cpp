@@ -145,7 +145,7 @@ void InternalForces<Real>::run() {
   // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
   // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
   // taken in element order either way.
-  const bool use_lanes = zener && ctx_.simd && model_.crimp_strain == 0;
+  const bool use_lanes = zener && ctx_.simd;
   const int ng = (ne + kBatch - 1) / kBatch;
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : stored, diss, released, nbroke, damp) \
   reduction(max : max_strain) if (ctx_.threads > 1)
@@ -167,6 +167,11 @@ void InternalForces<Real>::run() {
         b.fail = fail;
         b.breakable = breakable;
         b.damping_k = ctx_.damping_k;
+        b.crimp_strain = model_.crimp_strain;
+        b.crimp_fraction = model_.crimp_fraction;
+        b.crimp_width = model_.crimp_width;
+        b.crimp_damping_k = ctx_.crimp_damping_k;
+        b.crimp_damp_stress = ctx_.crimp_damping_k > 0 ? &s_.crimp_damp_stress[e0] : nullptr;
         b.prev_strain = &s_.prev_strain[e0];
         b.ev = &s_.ev[e0];
         b.strain = &s_.strain[e0];
@@ -177,6 +182,7 @@ void InternalForces<Real>::run() {
           for (int l = 0; l < kBatch; ++l) {
             diss += b.dd[l];
             damp += b.dw[l];
+            if (ctx_.crimp_damping_k > 0) damp += b.cw[l];  // (element_one adds it after the snap damping's)
             stored += b.u[l];
             max_strain = std::max(max_strain, b.eps[l]);
           }

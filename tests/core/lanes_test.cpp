@@ -298,6 +298,61 @@ TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
   }
   // By construction no element fails or changes branch, so every group is the lanes' to take.
   EXPECT_EQ(taken, 200) << "groups the lanes should have taken fell back to one element at a time";
+  // With the pin-jointed crimp stage and its damping: apparent strains across the toe
+  // (below it, in it, past it), the last step's own strain a little below this one's.
+  int crimp_taken = 0;
+  const double ec = 0.02, w = 0.02;
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<double> x;
+    int a[4], b[4];
+    double rests[4], areas[4], prev[2][4], ev[2][4], strain[2][4], stress[2][4], energy[2][4], force[2][12];
+    double cds[2][4];
+    for (int l = 0; l < 4; ++l) {
+      a[l] = 2 * l, b[l] = 2 * l + 1;
+      rests[l] = 0.867e-3, areas[l] = 7.64e-8;
+      const double app = -0.01 + 0.075 * std::abs(rnd());  // apparent strain, -1 % to 6.5 %
+      const double len = rests[l] * (1 + app);
+      for (double v : {0.0, 0.0, 0.0, len, 0.0, 0.0}) x.push_back(v);
+      // The material strain a step ago a little below the crimp stage's value now: taut lanes stay taut.
+      const double xx = app - ec;
+      const double p = xx >= w ? xx : (xx > -w ? (xx + w) * (xx + w) / (4 * w) : 0.0);
+      const double mat = 0.05 * app + 0.95 * p;
+      const double p0 = mat * (1 - 0.01 * std::abs(rnd())), e0 = std::max(0.0, mat) * std::abs(rnd()) / 4;
+      const double d0 = 1e6 * std::abs(rnd());
+      for (int k = 0; k < 2; ++k) {
+        prev[k][l] = p0;
+        ev[k][l] = e0;
+        strain[k][l] = (1 + app * 0.999) / (1 + ec) - 1;
+        stress[k][l] = trial % 3 == 0 ? 0.0 : 1e8;  // some lanes turning taut (snap damping)
+        cds[k][l] = d0;
+      }
+    }
+    lanes::ElementBatch e[2];
+    for (int k = 0; k < 2; ++k) {
+      e[k].x = x.data();
+      e[k].a = a, e[k].b = b, e[k].rest = rests, e[k].area = areas;
+      e[k].k1 = c.k1, e[k].k2 = c.k2, e[k].mu = c.mu, e[k].dt = z.dt, e[k].inv_dt = z.inv_dt, e[k].lam = z.lam;
+      e[k].g = z.g, e[k].decay = z.decay, e[k].slack_decay = z.slack_decay;
+      e[k].fail = 0.052, e[k].breakable = true;
+      e[k].damping_k = 5e3;
+      e[k].crimp_strain = ec, e[k].crimp_fraction = 0.05, e[k].crimp_width = w;
+      e[k].crimp_damping_k = 8.7e3, e[k].crimp_damp_stress = cds[k];
+      e[k].prev_strain = prev[k], e[k].ev = ev[k], e[k].strain = strain[k], e[k].stress = stress[k];
+      e[k].energy = energy[k], e[k].force = force[k];
+    }
+    const bool ok2 = lanes::avx2::zener4(e[0]), ok5 = lanes::avx512::zener4(e[1]);
+    ASSERT_EQ(ok2, ok5) << "crimp trial " << trial;
+    if (!ok2) continue;
+    ++crimp_taken;
+    EXPECT_EQ(std::memcmp(ev[0], ev[1], sizeof ev[0]), 0);
+    EXPECT_EQ(std::memcmp(strain[0], strain[1], sizeof strain[0]), 0);
+    EXPECT_EQ(std::memcmp(stress[0], stress[1], sizeof stress[0]), 0);
+    EXPECT_EQ(std::memcmp(force[0], force[1], sizeof force[0]), 0);
+    EXPECT_EQ(std::memcmp(cds[0], cds[1], sizeof cds[0]), 0);
+    EXPECT_EQ(std::memcmp(e[0].cw, e[1].cw, sizeof e[0].cw), 0);
+    EXPECT_EQ(std::memcmp(e[0].dw, e[1].dw, sizeof e[0].dw), 0);
+  }
+  EXPECT_GT(crimp_taken, 20) << "the crimp trials should mostly go through the lanes";
 }
 
 // A whole impact (breaks, ravelled and released crossings, windows at yarn ends that the
@@ -319,6 +374,33 @@ TEST_F(Lanes, RunsAreBitIdenticalToOneCrossingAtATime) {
     }
     const Summary s = on.summary();
     EXPECT_GT(s.broken_warp + s.broken_weft, 0) << "the run should exercise broken segments";
+  }
+}
+
+// The pin-jointed model's elements go through the lanes with their crimp stage and crimp
+// damping (element_lanes.h): a whole impact, through the toe, breaks and the clamps, gives the
+// same state bit for bit with the lanes on and off, on one thread and on two, and the same
+// energy ledger.
+TEST_F(Lanes, PinJointedRunsAreBitIdenticalToOneElementAtATime) {
+  const auto base = test::small_patch() + std::vector<std::string>{"solver.model=pin_jointed",
+                                                                    "projectile.velocity_mps=400", "solver.end_time_us=40"};
+  for (const char* threads : {"solver.threads=1", "solver.threads=2"}) {
+    SCOPED_TRACE(threads);
+    Simulation on(test::scene_with(base + std::vector<std::string>{threads}));
+    Simulation off(test::scene_with(base + std::vector<std::string>{threads, "solver.simd=false"}));
+    ASSERT_TRUE(on.solver().simd_active());
+    ASSERT_FALSE(off.solver().simd_active());
+    ASSERT_GT(on.solver().model().crimp_strain, 0) << "the pin-jointed model should have its crimp stage";
+    ASSERT_GT(on.solver().model().crimp_damping_beta, 0) << "and its crimp damping";
+    for (double t : {5e-6, 20e-6, 40e-6}) {
+      test::run_until(on, t);
+      test::run_until(off, t);
+      EXPECT_EQ(on.state_hash(), off.state_hash()) << "at " << t * 1e6 << " us";
+    }
+    const Summary s = on.summary(), r = off.summary();
+    EXPECT_GT(s.broken_warp + s.broken_weft, 0) << "the run should exercise breaks";
+    EXPECT_EQ(s.energy_absorbed_J, r.energy_absorbed_J);
+    EXPECT_EQ(s.energy_balance_error, r.energy_balance_error) << "the ledger (crimp damping booked in the same order)";
   }
 }
 

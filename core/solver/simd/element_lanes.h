@@ -5,7 +5,8 @@
 // the one-element code in solver/internal_forces.cpp (InternalForces::element_one with ZenerStepper::step), in
 // the same order, without floating-point contraction: the results are the same bit for bit
 // (tested). It covers the regular case, four intact elements of which none fails in this
-// step; the solver does the others one at a time.
+// step; the solver does the others one at a time. With the pin-jointed model's crimp stage
+// the strain the yarn law sees and the force factor are the crimp stage's, lane by lane.
 #pragma once
 
 #include "contact_lanes.h"
@@ -22,13 +23,19 @@ struct ElementBatch {
   double fail;
   bool breakable;
   double damping_k = 0;  // beta E_inst of the element damping (internal_forces.cpp: element_one)
+  // The pin-jointed crimp stage (stage.h: crimp_stage; crimp_strain 0: none) and its damping
+  // (yarn.crimp_damping: crimp_damping_k = beta E A / A, crimp_damp_stress per element, in/out).
+  double crimp_strain = 0, crimp_fraction = 1, crimp_width = 0;
+  double crimp_damping_k = 0;
+  double* crimp_damp_stress = nullptr;
   // In/out, per element (pointers to element e0 of the solver's arrays): last step's strain
   // (becomes this step's), the viscous strain; out: strain, stress, stored energy and the
   // force on node b (x y z per element).
   double *prev_strain, *ev, *strain, *stress, *energy, *force;
   // Out, per lane, for the solver's sums (taken in element order): stored energy, energy
   // dissipated by the dashpot over the step, strain.
-  double u[kWidth], dd[kWidth], eps[kWidth], dw[kWidth];  // (dw: the element damping's work)
+  // (dw: the snap damping's work; cw: the crimp damping's, added after it as element_one does)
+  double u[kWidth], dd[kWidth], eps[kWidth], dw[kWidth], cw[kWidth];
 };
 
 // Updates the four elements and returns true, or returns false without writing anything
