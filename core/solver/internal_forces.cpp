@@ -211,16 +211,14 @@ void InternalForces<Real>::run() {
   // the ledger at every break, 0.003 J a break on the 20 mm test patch, 4 % of its impact).
   const int nbend = int(model_.bend_k.size());
   double bend_stored = 0, bend_released = 0;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored, bend_released) \
-  if (ctx_.threads > 1)
-  for (int s = 0; s < nbend; ++s) {
+  auto bend_one = [&](int s, double& stored_sum, double& released_sum) {
     const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
     double& held = s_.bend_energy[s];
     if (s_.broken_flag[e1] || s_.broken_flag[e2]) {
       s_.bend_force[s].setZero();
-      bend_released += held;
+      released_sum += held;
       held = 0;
-      continue;
+      return;
     }
     const int ax = model_.bend_mirror[s];
     if (ax >= 0) {
@@ -230,11 +228,11 @@ void InternalForces<Real>::run() {
       const double comp = model_.bend_rest[s] - 2 * std::abs(double(mc));
       s_.bend_force[s].setZero();
       held = comp > 0 ? 0.25 * model_.bend_k[s] * comp * comp : 0.0;
-      bend_stored += held;
+      stored_sum += held;
       if (comp > 0) {
         s_.bend_force[s][ax] = Real(mc >= Real(0) ? 1 : -1) * Real(model_.bend_k[s] * comp);
       }
-      continue;
+      return;
     }
     const V3 m1 = Real(0.5) * (s_.x[model_.elem_a[e1]] + s_.x[model_.elem_b[e1]]);
     const V3 m2 = Real(0.5) * (s_.x[model_.elem_a[e2]] + s_.x[model_.elem_b[e2]]);
@@ -244,7 +242,7 @@ void InternalForces<Real>::run() {
     if (sl >= r) {
       s_.bend_force[s].setZero();
       held = 0;
-      continue;
+      return;
     }
     // Compression-only spring 1/2 k (r - s)^2, pushing midpoint 2 away from 1. Below
     // s = r/2 (a yarn folded back on itself, e.g. a broken end whipping) the potential
@@ -257,7 +255,41 @@ void InternalForces<Real>::run() {
       held = 0.25 * k * r * r - 0.5 * k * sl * sl;
       s_.bend_force[s] = d * Real(k);
     }
-    bend_stored += held;
+    stored_sum += held;
+  };
+  // In groups of four: groups of intact springs off the symmetry planes go through the lanes
+  // (element_lanes.h: bend4, the same numbers), the rest one at a time; the sums in spring
+  // order either way (a spring apart adds nothing: its energy is +0).
+  const int nbg = (nbend + kBatch - 1) / kBatch;
+  const bool bend_lanes = std::is_same_v<Real, double> && ctx_.simd;
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored, bend_released) \
+  if (ctx_.threads > 1)
+  for (int grp = 0; grp < nbg; ++grp) {
+    const int s0 = grp * kBatch, s1 = std::min(nbend, s0 + kBatch);
+    if constexpr (std::is_same_v<Real, double>) {
+      bool regular = bend_lanes && s1 - s0 == kBatch;
+      for (int s = s0; s < s1 && regular; ++s) {
+        const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
+        regular = !s_.broken_flag[e1] && !s_.broken_flag[e2] && model_.bend_mirror[s] < 0;
+      }
+      if (regular) {
+        lanes::BendBatch b;
+        b.x = s_.x[0].data();
+        for (int l = 0; l < kBatch; ++l) {
+          const int e1 = model_.bend_e1[s0 + l], e2 = model_.bend_e2[s0 + l];
+          b.a1[l] = model_.elem_a[e1], b.b1[l] = model_.elem_b[e1];
+          b.a2[l] = model_.elem_a[e2], b.b2[l] = model_.elem_b[e2];
+        }
+        b.rest = &model_.bend_rest[s0];
+        b.k = &model_.bend_k[s0];
+        b.force = s_.bend_force[s0].data();
+        b.energy = &s_.bend_energy[s0];
+        lanes::bend4(b);
+        for (int l = 0; l < kBatch; ++l) bend_stored += b.held[l];
+        continue;
+      }
+    }
+    for (int s = s0; s < s1; ++s) bend_one(s, bend_stored, bend_released);
   }
   // Gather, and with each node's force the free update of Eq 1-2 (stage.h: free_update).
   const int n = model_.node_count;

@@ -353,6 +353,36 @@ TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
     EXPECT_EQ(std::memcmp(e[0].dw, e[1].dw, sizeof e[0].dw), 0);
   }
   EXPECT_GT(crimp_taken, 20) << "the crimp trials should mostly go through the lanes";
+  // Bending springs: midpoints apart, compressed, and folded below half the rest distance.
+  int regimes[3] = {0, 0, 0};
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<double> x(3 * 16);
+    for (double& v : x) v = 0.3e-3 * rnd();
+    lanes::BendBatch b[2];
+    double rest[4], k[4], force[2][12], energy[2][4];
+    for (int l = 0; l < 4; ++l) {
+      rest[l] = 0.5e-3 * (1 + 0.5 * rnd()), k[l] = 1e3 * (1 + 0.5 * rnd());
+      const double* p = &x[12 * l];
+      double d2 = 0;
+      for (int m = 0; m < 3; ++m) {
+        const double dm = 0.5 * (p[6 + m] + p[9 + m]) - 0.5 * (p[m] + p[3 + m]);
+        d2 += dm * dm;
+      }
+      const double sl = std::sqrt(d2);
+      ++regimes[sl >= rest[l] ? 0 : sl >= 0.5 * rest[l] ? 1 : 2];
+    }
+    for (int q = 0; q < 2; ++q) {
+      b[q].x = x.data();
+      for (int l = 0; l < 4; ++l) b[q].a1[l] = 4 * l, b[q].b1[l] = 4 * l + 1, b[q].a2[l] = 4 * l + 2, b[q].b2[l] = 4 * l + 3;
+      b[q].rest = rest, b[q].k = k, b[q].force = force[q], b[q].energy = energy[q];
+    }
+    lanes::avx2::bend4(b[0]);
+    lanes::avx512::bend4(b[1]);
+    EXPECT_EQ(std::memcmp(force[0], force[1], sizeof force[0]), 0) << "bend trial " << trial;
+    EXPECT_EQ(std::memcmp(energy[0], energy[1], sizeof energy[0]), 0) << "bend trial " << trial;
+    EXPECT_EQ(std::memcmp(b[0].held, b[1].held, sizeof b[0].held), 0) << "bend trial " << trial;
+  }
+  for (int g = 0; g < 3; ++g) EXPECT_GT(regimes[g], 20) << "every regime of the spring should be tried: " << g;
 }
 
 // A whole impact (breaks, ravelled and released crossings, windows at yarn ends that the

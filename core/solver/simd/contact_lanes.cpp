@@ -48,4 +48,11 @@ bool zener4(ElementBatch& s) {
   return isa() == Isa::avx512 ? avx512::zener4(s) : avx2::zener4(s);
 }
 
+void bend4(BendBatch& s) {
+  if (isa() == Isa::avx512)
+    avx512::bend4(s);
+  else
+    avx2::bend4(s);
+}
+
 }  // namespace ravel::lanes

@@ -38,6 +38,23 @@ struct ElementBatch {
   double u[kWidth], dd[kWidth], eps[kWidth], dw[kWidth], cw[kWidth];
 };
 
+// Four bending springs (internal_forces.cpp: the compression-only springs between the
+// midpoints of adjoining elements), none of them broken or on a symmetry plane.
+struct BendBatch {
+  // In: node positions; per lane the end nodes of the spring's two elements; the springs'
+  // rest distances and stiffnesses (pointers to spring s0 of the model's arrays, as the next four).
+  const double* x;
+  int a1[kWidth], b1[kWidth], a2[kWidth], b2[kWidth];
+  const double *rest, *k;
+  // Out: the force on the second midpoint (x y z per spring) and the stored energy, per
+  // spring (pointers to spring s0 of the solver's arrays), and the energies in lane order.
+  double *force, *energy;
+  double held[kWidth];
+};
+
+// Updates the four springs (always succeeds). Only call when available().
+void bend4(BendBatch& s);
+
 // Updates the four elements and returns true, or returns false without writing anything
 // when one of them reaches the failure strain (the solver then does them one at a time).
 // Only call when available().
@@ -45,9 +62,11 @@ bool zener4(ElementBatch& s);
 
 namespace avx2 {
 bool zener4(ElementBatch& s);
-}
+void bend4(BendBatch& s);
+}  // namespace avx2
 namespace avx512 {
 bool zener4(ElementBatch& s);
-}
+void bend4(BendBatch& s);
+}  // namespace avx512
 
 }  // namespace ravel::lanes
