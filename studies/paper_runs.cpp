@@ -341,7 +341,10 @@ void write_images(PaperState& ps) {
     image(
         "images/perforation_BL_" + e.label + ".png",
         e.label + " at " + num(e.result.hi_mps, "%.1f") + " m/s, the lowest perforating run of the BL search (Fig. 17)",
-        std::isfinite(e.frame_v) && same(e.frame_v, e.result.hi_mps) ? &e.frame : nullptr, [&] {
+        // (a run's scene has its velocity to 6 decimals, scene_runner's "%.6f": the frame of
+        // the run at hi_mps carries it rounded, so `same` never matched it and every image
+        // was a second run of that velocity to its end, 164 s of a 21 min study)
+        std::isfinite(e.frame_v) && std::abs(e.frame_v - e.result.hi_mps) <= 1e-6 ? &e.frame : nullptr, [&] {
           auto ov = plan.limit_overrides;
           ov.push_back(e.overrides[0]);
           ov.push_back("projectile.velocity_mps=" + num(e.result.hi_mps, "%.6f"));

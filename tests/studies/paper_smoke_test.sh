@@ -74,5 +74,7 @@ PY
 # Images need the offscreen renderer (absent in the sanitizer builds, where the report says so).
 if ! grep -q 'this build has no offscreen renderer' "$report"; then
   ls "$out"/images/*.png >/dev/null 2>&1 || fail "no perforation images"
+  # The searches ran in this call, so each image is the frame its run left: no case runs again.
+  grep -qE 'images [0-9.]+ s \(0 runs\)' "$report" || { grep 'Wall time' "$report"; fail "an image ran its case again"; }
 fi
 echo "paper smoke test ok ($claims statements)"
