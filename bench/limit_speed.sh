@@ -35,7 +35,7 @@ scene=(${RAVEL_LIMIT_SPEED_SCENE:+"$RAVEL_LIMIT_SPEED_SCENE"})
 field() {  # field FILE KEY: a number from limit.json (empty when null)
   python3 -c 'import json,sys; v=json.load(open(sys.argv[1])).get(sys.argv[2]); print("" if v is None else v)' "$1" "$2"
 }
-echo "scene,case,friction,model,wall_s,runs,runs_cancelled,jobs,bl_mps,error_mps,reference_bl_mps,reference_runs,reference_wall_s,diff_mps,within"
+echo "scene,case,friction,model,wall_s,runs,runs_cancelled,jobs,bl_mps,error_mps,reference_bl_mps,reference_runs,reference_wall_s,diff_mps,within,lowest_perforation_mps,perforations_below_reference,stops_above_fast"
 for c in "${cases[@]}"; do
   name=${c%%:*}
   sets=()
@@ -64,7 +64,20 @@ within = "" if not diff else str(abs(bl - rbl) <= max(1.0, 0.02 * rbl)).lower()
 # The reference's cost: its runs one after another (kept runs count with the time they took).
 ref_wall = sum(q.get("wall_time_s", 0) for q in b["runs"])
 num = lambda v: "" if v is None else f"{v:.3f}"
+# Where perforation is not a threshold in velocity (MODEL.md §9, non-monotone bands) the two
+# searches can bracket different alternations: the runs of both, taken together, say which.
+# lowest_perforation_mps: the lowest velocity either search saw perforate (the limit by its
+# definition, SPEC §8, as far as these runs show); perforations_below_reference: runs of either
+# search that perforated below the reference's bracket; stops_above_fast: runs that stopped
+# above the fast search's bracket.
+done = [q for q in a["runs"] + b["runs"] if not q.get("cancelled", False) and q.get("decided", True)]
+perf = [q["velocity_mps"] for q in done if q.get("perforated")]
+lowest = min(perf) if perf else None
+rb, fb = b.get("bracket_mps") or [None, None], a.get("bracket_mps") or [None, None]
+below = sum(1 for q in done if q.get("perforated") and rb[0] is not None and q["velocity_mps"] < rb[0])
+above = sum(1 for q in done if not q.get("perforated") and fb[1] is not None and q["velocity_mps"] > fb[1])
 print(",".join(map(str, [scene, name, mu, model, f"{float(wall):.1f}", full(a), a.get("runs_cancelled", 0),
-                         a.get("jobs", 1), num(bl), num(err), num(rbl), full(b), f"{ref_wall:.1f}", diff, within])))
+                         a.get("jobs", 1), num(bl), num(err), num(rbl), full(b), f"{ref_wall:.1f}", diff, within,
+                         num(lowest), below, above])))
 EOF
 done
