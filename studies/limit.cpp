@@ -578,6 +578,32 @@ std::vector<Shot> kept_runs(const std::string& scene_path, const std::vector<std
   return out;
 }
 
+namespace {
+std::string fmt_mps(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.2f", v);
+  return b;
+}
+}  // namespace
+
+OutcomeBand outcome_band(const LimitResult& r) {
+  OutcomeBand b;
+  for (const auto& s : r.runs) {
+    if (s.failed || s.cancelled || !s.decided) continue;
+    if (s.perforated && (b.lowest_perforation < 0 || s.velocity_mps < b.lowest_perforation))
+      b.lowest_perforation = s.velocity_mps;
+    if (!s.perforated && s.velocity_mps > b.highest_stop) b.highest_stop = s.velocity_mps;
+  }
+  b.threshold = b.lowest_perforation < 0 || b.highest_stop < b.lowest_perforation;
+  if (!b.threshold)
+    for (const auto& s : r.runs) {
+      if (s.failed || s.cancelled || !s.decided) continue;
+      // A run inside the band whose outcome differs from the one the bracket gives it.
+      b.against += (s.perforated && s.velocity_mps < r.lo_mps) || (!s.perforated && s.velocity_mps > r.hi_mps);
+    }
+  return b;
+}
+
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
                        const std::vector<std::string>& overrides) {
   nlohmann::ordered_json j;
@@ -659,6 +685,27 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
                " perforating runs once the projectile was passing through (decided_passing: true; their residual "
                "velocity is the speed then, about 1 m/s above a full run's)";
   if (!skipped.empty()) j["skipped_note"] = skipped + "; the reference runs every run to its end";
+  {
+    // Whether the outcomes of this search's runs form a threshold in velocity (issue 36,
+    // MODEL.md section 9): where they do not, the band from the lowest perforation to the
+    // highest stop is where outcomes alternate, and two searches may bracket different places
+    // in it (the limit, SPEC section 8, is the lowest perforation).
+    const OutcomeBand b = outcome_band(r);
+    j["lowest_perforation_mps"] =
+        b.lowest_perforation >= 0 ? nlohmann::ordered_json(b.lowest_perforation) : nlohmann::ordered_json(nullptr);
+    j["highest_stop_mps"] =
+        b.highest_stop >= 0 ? nlohmann::ordered_json(b.highest_stop) : nlohmann::ordered_json(nullptr);
+    j["threshold"] = b.threshold;
+    j["runs_against_threshold"] = b.against;
+    j["threshold_note"] =
+        b.threshold ? std::string(
+                          "every decided run below the lowest perforation stopped and every one above the "
+                          "highest stop perforated: over these runs the outcome is a threshold in velocity")
+                    : "outcomes alternate between " + fmt_mps(b.lowest_perforation) + " and " +
+                          fmt_mps(b.highest_stop) + " m/s (" + std::to_string(b.against) +
+                          " runs contradict a threshold): a bracket of two runs sees one place of this band; the "
+                          "limit, the lowest velocity that perforates, is at most the lowest perforation";
+  }
   j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);
   j["error_note"] = r.error_note;
   j["wall_time_s"] = r.wall_time_s;

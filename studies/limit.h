@@ -154,6 +154,19 @@ struct LimitResult {
   std::string error_note;
 };
 
+// Whether a search's runs form a threshold in velocity. Decided runs only (no cancelled,
+// failed or undecided one). The outcome is a threshold when every stop lies below the lowest
+// perforation; otherwise [lowest_perforation, highest_stop] is a band where outcomes
+// alternate, and `against` counts the runs whose outcome contradicts the bracket (a
+// perforation below lo or a stop above hi).
+struct OutcomeBand {
+  double lowest_perforation = -1;  // -1: no run perforated
+  double highest_stop = -1;        // -1: no run stopped
+  bool threshold = true;
+  int against = 0;
+};
+OutcomeBand outcome_band(const LimitResult& r);
+
 // What a fast search reports as it goes (hooks called on the search's own thread).
 struct LimitProgress {
   double lo_mps = -1, hi_mps = -1;  // the bracket so far (-1: no such end yet)

@@ -277,6 +277,14 @@ TEST(FastLimit, ProbesBelowFindTheLowestPerforation) {
   EXPECT_NE(std::find(f.rules.begin(), f.rules.end(), "probe_below"), f.rules.end());
   // The answer stands on every probe below it having stopped.
   expect_probes_stopped(f, o);
+  // The runs above the lower band that stopped say the outcome is no threshold; the band
+  // reaches from the answer's perforation to the highest of them.
+  const auto band = outcome_band(f);
+  EXPECT_FALSE(band.threshold);
+  EXPECT_DOUBLE_EQ(band.lowest_perforation, f.hi_mps);
+  EXPECT_GE(band.highest_stop, 88.0);
+  EXPECT_LT(band.highest_stop, 101.5);
+  EXPECT_GE(band.against, 1);
 }
 
 // Undecided runs are left out of the bracket (as the reference does), and a failed run

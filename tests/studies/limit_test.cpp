@@ -237,6 +237,17 @@ TEST(BallisticLimit, AStoppedFitRunAboveTheBracketIsReported) {
   bool reported = false;
   for (const auto& w : r.warnings) reported |= w.find("non-monotone outcome: 87.") != std::string::npos;
   EXPECT_TRUE(reported) << "no warning for the stopped fit run";
+  // limit.json says the outcomes are no threshold, and where they alternate.
+  const auto band = outcome_band(r);
+  EXPECT_FALSE(band.threshold);
+  EXPECT_EQ(band.against, 1);
+  EXPECT_DOUBLE_EQ(band.lowest_perforation, r.hi_mps);
+  EXPECT_GT(band.highest_stop, 85.0);
+  EXPECT_LT(band.highest_stop, 90.0);
+  const auto j = nlohmann::json::parse(limit_json(r, o, "s", {}));
+  EXPECT_EQ(j["threshold"], false);
+  EXPECT_EQ(j["runs_against_threshold"], 1);
+  EXPECT_NE(j["threshold_note"].get<std::string>().find("alternate"), std::string::npos);
   // Without it the same search is clean.
   EXPECT_TRUE(find_ballistic_limit(law, o, true).warnings.empty());
 }
@@ -299,12 +310,22 @@ TEST(BallisticLimit, LimitJsonStatesMethodAndErrorEstimate) {
   EXPECT_LE(std::abs(r.ballistic_limit_mps - 70.4), r.error_mps + 1e-12);
   const std::string text = limit_json(r, o, "scene.toml", {"a=1"});
   const auto j = nlohmann::json::parse(text);
+  // clang-format off
   for (const char* key : {"ballistic_limit_mps", "bracket_mps", "bracket_note", "tolerance_mps", "bracketed",
                           "converged", "lambert_jonas", "runs", "warnings", "interrupted", "scene", "overrides",
                           "start_mps", "growth", "growth_accel", "wall_time_s", "runs_per_hour", "method",
                           "method_note", "rules", "jobs", "rounds", "runs_finished", "runs_cancelled",
                           "skipped_full_runs", "error_mps", "error_note"})
+    // clang-format on
     EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key :
+       {"lowest_perforation_mps", "highest_stop_mps", "threshold", "runs_against_threshold", "threshold_note"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  // A threshold target: the bracket's ends are the lowest perforation and the highest stop.
+  EXPECT_EQ(j["threshold"], true);
+  EXPECT_EQ(j["runs_against_threshold"], 0);
+  EXPECT_DOUBLE_EQ(j["lowest_perforation_mps"].get<double>(), r.hi_mps);
+  EXPECT_DOUBLE_EQ(j["highest_stop_mps"].get<double>(), r.lo_mps);
   EXPECT_EQ(j["method"], "reference");
   EXPECT_EQ(j["skipped_full_runs"], false);
   EXPECT_EQ(j["runs_finished"], int(r.runs.size()));
