@@ -44,6 +44,11 @@ struct PaperOptions {
   std::string out_dir;
   int jobs = 1;
   bool quick = false;
+  // The ballistic-limit searches: false (default), the fast search of `ravel limit`, one run
+  // in flight per search, with its probes below the bracket (the limit is the lowest velocity
+  // that perforates, SPEC §8); true, the bisection of `ravel limit --reference`, which can
+  // land on a higher alternation where outcomes are not a threshold in velocity.
+  bool reference_limits = false;
   // Draw `frame` to a PNG at `path`; returns false and says why when it cannot.
   std::function<bool(const Frame& frame, const std::string& path, std::string* error)> render_png;
   // Progress: stage name, cases done, cases total, and how many of the done ones were

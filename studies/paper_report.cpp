@@ -13,6 +13,15 @@
 
 namespace ravel::studies::paper_detail {
 
+namespace {
+// A search's outcomes: a threshold in velocity, or the band where they alternate.
+std::string outcomes_cell(const LimitResult& r) {
+  const OutcomeBand b = outcome_band(r);
+  if (b.threshold) return "threshold";
+  return "alternate " + num(b.lowest_perforation, "%.1f") + " - " + num(b.highest_stop, "%.1f");
+}
+}  // namespace
+
 void make_charts(PaperState& ps) {
   const PaperOptions& opt = ps.opt;
   const PaperPlan& plan = ps.plan;
@@ -264,7 +273,7 @@ void write_report(PaperState& ps) {
        << stem << ".csv)\n\n";
 
   md << "## Ballistic limits\n\n| model | BL (m/s) | bracket (m/s) | runs | search wall time (s) | started at (m/s) "
-        "|\n|---|---|---|---|---|---|\n";
+        "| search | outcomes |\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : ps.limits) {
     std::string lab = e.label;
     for (char& ch : lab)
@@ -276,21 +285,27 @@ void write_report(PaperState& ps) {
          << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | "
          << (std::isfinite(e.start_mps) ? num(e.start_mps, "%.1f") + " (" + e.start_from + ")"
                                         : std::string("(resumed)"))
-         << " |\n";
+         << " | " << e.result.method << " | " << outcomes_cell(e.result) << " |\n";
     else
       md << "not found: "
          << (!e.error.empty()             ? e.error
              : !e.result.warnings.empty() ? e.result.warnings.front()
                                           : "")
-         << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | |\n";
+         << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | | " << e.result.method
+         << " | |\n";
   }
   md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). The searches "
         "start from a fixed tree, so the numbers do not depend on --jobs: mu = 0.2 and 0.4 at the Lambert-Jonas limit "
         "fitted to their velocity-study runs; below 0.2, two chains from 0.2's limit (0.1, then 0.06 from 0.1; 0.02, "
         "then 0 from 0.02); above, each from the next lower friction, the pin-jointed model from the highest (with no "
         "parent limit, at its own fit, "
-        "else 75 m/s). Each search steps by 15 % from its start (25 % from 75 m/s), the steps growing (23, 37, 60 %) "
-        "until the outcome flips, then bisects.\n\n";
+        "else 75 m/s). Each search steps by 15 % from its start (25 % from 75 m/s) until the outcome flips, then "
+        "narrows the bracket. The fast search (`ravel limit`, one run in flight per search) places its points from "
+        "the residual velocities and, once the bracket is narrow, probes 5, 10, 15 and 20 % below it: the limit is "
+        "the lowest velocity that perforates (SPEC section 8), and where outcomes alternate near it a bracket of two "
+        "runs cannot see a perforation below. The reference search (`--reference-limits`) bisects, its steps growing "
+        "(23, 37, 60 %). *outcomes*: threshold when every stopped run of the search lies below every perforating "
+        "one, else the band where they alternate (lowest perforation - highest stop).\n\n";
 
   md << "## Perforation images\n\n";
   if (ps.images.empty()) md << "No images (this build has no offscreen renderer).\n\n";
@@ -343,7 +358,11 @@ std::string claims_json(const PaperState& ps) {
       l["lo_mps"] = e.result.lo_mps;
       l["hi_mps"] = e.result.hi_mps;
       l["converged"] = e.result.converged;
+      const OutcomeBand b = outcome_band(e.result);
+      l["threshold"] = b.threshold;  // false: outcomes alternate from the lowest perforation to the highest stop
+      if (!b.threshold) l["band_mps"] = {b.lowest_perforation, b.highest_stop};
     }
+    l["method"] = e.result.method;
     if (!e.error.empty()) l["error"] = e.error;
     j["limits"].push_back(l);
   }

@@ -244,21 +244,30 @@ void run_limit_stage(PaperState& ps) {
           e.result = limit_from_json(read_text_file(e.dir + "/limit.json"));
           e.kept = true;
         } else {
-          ShootFn shoot = scene_shooter(
-              opt.scene_path, ov, interrupt,
-              [&e](const Simulation& sim) {
-                if (!e.keep_frame || !sim.summary().perforated) return;
-                const double v = sim.scene().projectile.velocity_mps;
-                if (v < e.frame_v) e.frame_v = v, e.frame = sim.frame();
-              },
-              e.dir);
+          // The lowest perforating run's last frame, for the images (runs are on their own
+          // threads in the fast search: one at a time here, but guarded all the same).
+          auto keep = [&e, &mu](const Simulation& sim) {
+            if (!e.keep_frame || !sim.summary().perforated) return;
+            const double v = sim.scene().projectile.velocity_mps;
+            std::lock_guard<std::mutex> lock(mu);
+            if (v < e.frame_v) e.frame_v = v, e.frame = sim.frame();
+          };
           LimitOptions mine = lo;
           if (seed > 0) {
             mine.start_mps = std::clamp(seed, mine.min_mps, mine.max_mps);
             mine.growth = 1.15;
           }
           e.start_mps = mine.start_mps;
-          e.result = find_ballistic_limit(shoot, mine, false);
+          if (opt.reference_limits) {
+            e.result = find_ballistic_limit(scene_shooter(opt.scene_path, ov, interrupt, keep, e.dir), mine, false);
+          } else {
+            // One run in flight per search (the study runs --jobs searches at once); the
+            // search's runs kept in e.dir/runs/ by an interrupted call count as made.
+            mine.jobs = 1;
+            e.result = find_ballistic_limit_fast(scene_runner(opt.scene_path, ov, keep, e.dir), mine, false, interrupt,
+                                                 {}, kept_runs(opt.scene_path, ov, e.dir));
+            if (e.result.interrupted) throw std::runtime_error("interrupted");  // no limit.json: a rerun resumes
+          }
           std::lock_guard<std::mutex> lock(mu);
           ps.limit_runs += int(e.result.runs.size());
           write_file_atomic(e.dir + "/limit.json", limit_json(e.result, mine, opt.scene_path, ov));

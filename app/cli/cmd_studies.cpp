@@ -369,6 +369,7 @@ int cmd_paper(const Args& args) {
     opt.out_dir = a.out_dir;
     opt.jobs = jobs_from(a);
     opt.quick = has_switch(a, "quick");
+    opt.reference_limits = has_switch(a, "reference-limits");
     const bool verbose = progress_wanted(a);
 #ifdef RAVEL_HAVE_RENDER
     std::unique_ptr<render::HeadlessRenderer> renderer;
@@ -398,7 +399,8 @@ int cmd_paper(const Args& args) {
     };
     install_signal_handlers();
     if (verbose)
-      std::printf("paper: %s mode, %d jobs, out %s\n", opt.quick ? "quick" : "full", opt.jobs, opt.out_dir.c_str());
+      std::printf("paper: %s mode, %d jobs, %s ballistic-limit searches, out %s\n", opt.quick ? "quick" : "full",
+                  opt.jobs, opt.reference_limits ? "reference" : "fast", opt.out_dir.c_str());
     std::fflush(stdout);
     studies::PaperResult r;
     try {

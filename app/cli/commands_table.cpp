@@ -121,6 +121,9 @@ std::vector<Command> make_table() {
                 kThreads,
                 kJobs,
                 {"quick", nullptr, false, "a small mesh and few cases (minutes, for a check)"},
+                {"reference-limits", nullptr, false,
+                 "ballistic limits by the bisection of ravel limit --reference (default: the fast search, one run "
+                 "in flight per search, with its probes below the bracket)"},
                 kQuiet}});
   t.push_back({"demo",
                "ravel demo --list | NAME|all --out DIR [options]",
