@@ -272,9 +272,9 @@ void limit_window(GuiApp& app) {
                   s.result.lo_mps, s.result.hi_mps, s.result.error_mps, s.result.converged ? "" : ", not converged");
     else
       ImGui::TextColored(kBad, "no bracket: %s", s.result.warnings.empty() ? "" : s.result.warnings[0].c_str());
-    ImGui::TextDisabled("%s search, %d runs in flight, %d rounds, %d moot runs stopped, %.0f s",
-                        s.result.method.c_str(), s.result.jobs, s.result.rounds, s.result.runs_cancelled,
-                        s.result.wall_time_s);
+    ImGui::TextDisabled("%s search, %d run%s in flight, %d rounds, %d moot runs stopped, %.0f s",
+                        s.result.method.c_str(), s.result.jobs, s.result.jobs == 1 ? "" : "s", s.result.rounds,
+                        s.result.runs_cancelled, s.result.wall_time_s);
     if (const auto band = studies::outcome_band(s.result); s.result.bracketed && !band.threshold)
       ImGui::TextColored(kBad, "no threshold: outcomes alternate from %.1f to %.1f m/s", band.lowest_perforation,
                          band.highest_stop);
