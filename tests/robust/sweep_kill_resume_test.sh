@@ -57,6 +57,10 @@ mid=0
 for k in $(seq 1 "$kills"); do
   "$ravel" "${args[@]}" --out "$tmp/run" >/dev/null 2>&1 &
   pid=$!
+  # The clock starts when the sweep has its output folder, not at the launch: on a loaded
+  # machine (CI's parallel tests) starting the process alone can take longer than the
+  # delays below, and every kill then landed before the first case.
+  for _ in $(seq 1 1000); do [ -d "$tmp/run" ] && break; kill -0 "$pid" 2>/dev/null || break; sleep 0.01; done
   # A few cases' worth of time: the kills spread over the whole sweep.
   delay=$(awk -v r=$RANDOM -v t="$ref_s" -v n="$ncases" 'BEGIN { printf "%.3f", 0.03 + (r / 32767) * 5 * t / n }')
   sleep "$delay"
@@ -71,7 +75,7 @@ done
 [ "$mid" -gt 0 ] || bad "no kill landed in the middle of a case"
 
 # Cases finished before the final resume must not be run again.
-declare -A before
+declare -A before=()
 for d in "$tmp"/run/*/; do
   [ -f "$d/summary.json" ] && before["$d"]=$(stat -c %Y.%i "$d/summary.json")
 done
