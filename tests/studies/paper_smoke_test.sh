@@ -81,4 +81,19 @@ if ! grep -q 'this build has no offscreen renderer' "$report"; then
   # The searches ran in this call, so each image is the frame its run left: no case runs again.
   grep -qE 'images [0-9.]+ s \(0 runs\)' "$report" || { grep 'Wall time' "$report"; fail "an image ran its case again"; }
 fi
+# --reference-limits: the same study with the bisection of `ravel limit --reference`; the
+# velocity runs are the same, only the limit searches change (claims.json says which ran).
+ref_out=$out-reference
+rm -rf "$ref_out"
+"$ravel" paper --quick --set fabric.width_mm=24 --set fabric.length_mm=24 --jobs 2 --reference-limits \
+  --out "$ref_out" >"$ref_out.log" 2>&1 || { cat "$ref_out.log"; fail "ravel paper --reference-limits exited $?"; }
+grep -q "reference ballistic-limit searches" "$ref_out.log" || { cat "$ref_out.log"; fail "the log does not say the searches are the reference's"; }
+python3 - "$out/claims.json" "$ref_out/claims.json" <<'PY' || fail "--reference-limits did not run the reference searches"
+import json, sys
+fast, ref = (json.load(open(p)) for p in sys.argv[1:3])
+assert all(l["method"] == "reference" for l in ref["limits"]), ref["limits"]
+assert sum(l["found"] for l in ref["limits"]) >= 5, ref["limits"]
+assert [l["label"] for l in ref["limits"]] == [l["label"] for l in fast["limits"]]
+PY
+rm -rf "$ref_out" "$ref_out.log"
 echo "paper smoke test ok ($claims statements)"
