@@ -83,11 +83,17 @@ if ! grep -q 'this build has no offscreen renderer' "$report"; then
 fi
 # --reference-limits: the same study with the bisection of `ravel limit --reference`; the
 # velocity runs are the same, only the limit searches change (claims.json says which ran).
+# The velocity and compression runs are taken over from the study above (a rerun resumes
+# from kept runs), so only the searches and the images run again.
 ref_out=$out-reference
 rm -rf "$ref_out"
+mkdir -p "$ref_out"
+cp -r "$out/velocity" "$out/compression" "$ref_out/"
 "$ravel" paper --quick --set fabric.width_mm=24 --set fabric.length_mm=24 --jobs 2 --reference-limits \
   --out "$ref_out" >"$ref_out.log" 2>&1 || { cat "$ref_out.log"; fail "ravel paper --reference-limits exited $?"; }
 grep -q "reference ballistic-limit searches" "$ref_out.log" || { cat "$ref_out.log"; fail "the log does not say the searches are the reference's"; }
+grep -qE "velocity sweep: \[[0-9]+/[0-9]+\].* \(([0-9]+) kept from an earlier run\)" "$ref_out.log" ||
+  { cat "$ref_out.log"; fail "the --reference-limits study ran its velocity runs again"; }
 python3 - "$out/claims.json" "$ref_out/claims.json" <<'PY' || fail "--reference-limits did not run the reference searches"
 import json, sys
 fast, ref = (json.load(open(p)) for p in sys.argv[1:3])
