@@ -123,11 +123,19 @@ LambertJonas fit_lambert_jonas(const std::vector<double>& v_in, const std::vecto
   return fit;
 }
 
+namespace {
+// A run whose outcome contradicts the bracket [lo, hi]: a perforation below lo or a stop
+// above hi (failed, cancelled and undecided runs have no outcome and contradict nothing).
+bool against_bracket(const Shot& s, double lo, double hi) {
+  if (s.failed || s.cancelled || (!s.decided && !s.perforated)) return false;
+  return (s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi);
+}
+}  // namespace
+
 void warn_non_monotone(LimitResult& res) {
   const double lo = res.lo_mps, hi = res.hi_mps;
   for (const auto& s : res.runs) {
-    if (s.failed || s.cancelled || (!s.decided && !s.perforated)) continue;
-    if ((s.perforated && s.velocity_mps < lo) || (!s.perforated && s.velocity_mps > hi)) {
+    if (against_bracket(s, lo, hi)) {
       char b[200];
       std::snprintf(b, sizeof b, "non-monotone outcome: %.2f m/s %s although the bracket is [%.2f, %.2f] m/s",
                     s.velocity_mps, s.perforated ? "perforated" : "did not perforate", lo, hi);
@@ -578,14 +586,6 @@ std::vector<Shot> kept_runs(const std::string& scene_path, const std::vector<std
   return out;
 }
 
-namespace {
-std::string fmt_mps(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.2f", v);
-  return b;
-}
-}  // namespace
-
 OutcomeBand outcome_band(const LimitResult& r) {
   OutcomeBand b;
   for (const auto& s : r.runs) {
@@ -596,11 +596,7 @@ OutcomeBand outcome_band(const LimitResult& r) {
   }
   b.threshold = b.lowest_perforation < 0 || b.highest_stop < b.lowest_perforation;
   if (!b.threshold)
-    for (const auto& s : r.runs) {
-      if (s.failed || s.cancelled || !s.decided) continue;
-      // A run inside the band whose outcome differs from the one the bracket gives it.
-      b.against += (s.perforated && s.velocity_mps < r.lo_mps) || (!s.perforated && s.velocity_mps > r.hi_mps);
-    }
+    for (const auto& s : r.runs) b.against += against_bracket(s, r.lo_mps, r.hi_mps);
   return b;
 }
 
@@ -697,14 +693,18 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
         b.highest_stop >= 0 ? nlohmann::ordered_json(b.highest_stop) : nlohmann::ordered_json(nullptr);
     j["threshold"] = b.threshold;
     j["runs_against_threshold"] = b.against;
-    j["threshold_note"] =
-        b.threshold ? std::string(
-                          "every decided run below the lowest perforation stopped and every one above the "
-                          "highest stop perforated: over these runs the outcome is a threshold in velocity")
-                    : "outcomes alternate between " + fmt_mps(b.lowest_perforation) + " and " +
-                          fmt_mps(b.highest_stop) + " m/s (" + std::to_string(b.against) +
-                          " runs contradict a threshold): a bracket of two runs sees one place of this band; the "
-                          "limit, the lowest velocity that perforates, is at most the lowest perforation";
+    char note[320];
+    if (b.threshold)
+      std::snprintf(note, sizeof note,
+                    "every decided run below the lowest perforation stopped and every one above the highest stop "
+                    "perforated: over these runs the outcome is a threshold in velocity");
+    else
+      std::snprintf(note, sizeof note,
+                    "outcomes alternate between %.2f and %.2f m/s (%d runs contradict a threshold): a bracket of two "
+                    "runs sees one place of this band; the limit, the lowest velocity that perforates, is at most the "
+                    "lowest perforation",
+                    b.lowest_perforation, b.highest_stop, b.against);
+    j["threshold_note"] = note;
   }
   j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);
   j["error_note"] = r.error_note;

@@ -81,10 +81,9 @@ if ! grep -q 'this build has no offscreen renderer' "$report"; then
   # The searches ran in this call, so each image is the frame its run left: no case runs again.
   grep -qE 'images [0-9.]+ s \(0 runs\)' "$report" || { grep 'Wall time' "$report"; fail "an image ran its case again"; }
 fi
-# --reference-limits: the same study with the bisection of `ravel limit --reference`; the
-# velocity runs are the same, only the limit searches change (claims.json says which ran).
-# The velocity and compression runs are taken over from the study above (a rerun resumes
-# from kept runs), so only the searches and the images run again.
+# --reference-limits: the same study with the bisection of `ravel limit --reference`
+# (claims.json says which search ran). The velocity and compression runs are taken over from
+# the study above (a rerun resumes from kept runs), so only the searches and images run again.
 ref_out=$out-reference
 rm -rf "$ref_out"
 mkdir -p "$ref_out"
