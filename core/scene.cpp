@@ -294,7 +294,7 @@ std::vector<KeyDef> make_defs() {
        solver.split_penetration);
   BOOL("solver.decide_passing",
        "true: end the run as perforated once the projectile is passing through (held only by yarns with no intact "
-       "path to a clamp, above 2 % of its impact speed, and at its present drag it would travel further than the "
+       "path to a clamp, above 1 % of its impact speed, and at its present drag it would travel further than the "
        "fabric's largest half-size before stopping, for 100 us); the fast limit search sets it (docs/MODEL.md §8)",
        solver.decide_passing);
   BOOL("solver.projectile_holds",
