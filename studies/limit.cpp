@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <filesystem>
@@ -597,6 +598,26 @@ OutcomeBand outcome_band(const LimitResult& r) {
   b.threshold = b.lowest_perforation < 0 || b.highest_stop < b.lowest_perforation;
   if (!b.threshold)
     for (const auto& s : r.runs) b.against += against_bracket(s, r.lo_mps, r.hi_mps);
+  // V50: the kV50Pairs highest stops and lowest perforations (fewer when either side has fewer).
+  std::vector<double> stops, perfs;
+  for (const auto& s : r.runs) {
+    if (s.failed || s.cancelled || !s.decided) continue;
+    (s.perforated ? perfs : stops).push_back(s.velocity_mps);
+  }
+  std::sort(stops.begin(), stops.end(), std::greater<>());
+  std::sort(perfs.begin(), perfs.end());
+  const int k = std::min({kV50Pairs, int(stops.size()), int(perfs.size())});
+  if (k > 0) {
+    double sum = 0, lo = perfs[0], hi = stops[0];
+    for (int i = 0; i < k; ++i) {
+      sum += stops[size_t(i)] + perfs[size_t(i)];
+      lo = std::min({lo, stops[size_t(i)], perfs[size_t(i)]});
+      hi = std::max({hi, stops[size_t(i)], perfs[size_t(i)]});
+    }
+    b.v50 = sum / (2 * k);
+    b.v50_pairs = k;
+    b.v50_spread = hi - lo;
+  }
   return b;
 }
 
@@ -705,6 +726,15 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
                     "lowest perforation",
                     b.lowest_perforation, b.highest_stop, b.against);
     j["threshold_note"] = note;
+    j["v50_mps"] = b.v50 >= 0 ? nlohmann::ordered_json(b.v50) : nlohmann::ordered_json(nullptr);
+    j["v50_pairs"] = b.v50_pairs;
+    j["v50_spread_mps"] = b.v50_spread >= 0 ? nlohmann::ordered_json(b.v50_spread) : nlohmann::ordered_json(nullptr);
+    std::snprintf(note, sizeof note,
+                  "V50 of ballistic testing (MIL-STD-662F): the mean of the %d highest stops and the %d lowest "
+                  "perforations among the decided runs, spread %.2f m/s; the search places no run for it, so it is "
+                  "as good as the runs near the bracket",
+                  b.v50_pairs, b.v50_pairs, std::max(0.0, b.v50_spread));
+    j["v50_note"] = b.v50 >= 0 ? std::string(note) : std::string("no V50: no decided run stopped, or none perforated");
   }
   j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);
   j["error_note"] = r.error_note;

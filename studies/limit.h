@@ -159,11 +159,22 @@ struct LimitResult {
 // perforation; otherwise [lowest_perforation, highest_stop] is a band where outcomes
 // alternate, and `against` counts the runs whose outcome contradicts the bracket (a
 // perforation below lo or a stop above hi).
+//
+// With it the V50 of ballistic testing (MIL-STD-662F, "V50 ballistic test for armor"): the
+// mean of an equal number of the highest stops (partial penetrations) and the lowest
+// perforations (complete penetrations), here up to kV50Pairs of each, from the same decided
+// runs; `v50_spread` is the range of the velocities averaged. Where outcomes alternate it is
+// a robust middle of the band, which the lowest perforation (the limit of SPEC section 8) is
+// not; the search places no run for it.
+constexpr int kV50Pairs = 3;
 struct OutcomeBand {
   double lowest_perforation = -1;  // -1: no run perforated
   double highest_stop = -1;        // -1: no run stopped
   bool threshold = true;
   int against = 0;
+  double v50 = -1;         // -1: no stop or no perforation among the decided runs
+  int v50_pairs = 0;       // stops (= perforations) averaged
+  double v50_spread = -1;  // highest minus lowest velocity averaged
 };
 OutcomeBand outcome_band(const LimitResult& r);
 

@@ -278,6 +278,9 @@ void limit_window(GuiApp& app) {
     if (const auto band = studies::outcome_band(s.result); s.result.bracketed && !band.threshold)
       ImGui::TextColored(kBad, "no threshold: outcomes alternate from %.1f to %.1f m/s", band.lowest_perforation,
                          band.highest_stop);
+    if (const auto band = studies::outcome_band(s.result); band.v50 >= 0)
+      ImGui::TextDisabled("V50 %.1f m/s (%d highest stops, %d lowest perforations)", band.v50, band.v50_pairs,
+                          band.v50_pairs);
     if (s.result.fit.ok)
       ImGui::TextDisabled("Lambert-Jonas fit: %.1f m/s (a %.2f, p %.2f)", s.result.fit.vbl_mps, s.result.fit.a,
                           s.result.fit.p);

@@ -252,6 +252,53 @@ TEST(BallisticLimit, AStoppedFitRunAboveTheBracketIsReported) {
   EXPECT_TRUE(find_ballistic_limit(law, o, true).warnings.empty());
 }
 
+// The V50 of ballistic testing (MIL-STD-662F) in limit.json: the mean of the three highest
+// stops and the three lowest perforations among the decided runs; cancelled, failed and
+// undecided runs are no outcome. Runs by hand: stops 40, 45, 47, 49 and perforations 48, 50,
+// 55, 60 (one alternation, 48 P below 49 S), plus a cancelled 48.5, an undecided 46 and a
+// failed 44: V50 = (49 + 47 + 45 + 48 + 50 + 55) / 6 = 49, spread 55 - 45 = 10.
+TEST(BallisticLimit, V50IsTheMeanOfTheHighestStopsAndLowestPerforations) {
+  LimitResult r;
+  auto shot = [&](double v, bool perf) {
+    Shot s;
+    s.velocity_mps = v;
+    s.perforated = perf;
+    s.end_reason = perf ? "perforated" : "rebounded";
+    r.runs.push_back(s);
+    return &r.runs.back();
+  };
+  for (double v : {40, 45, 47, 49}) shot(v, false);
+  for (double v : {48, 50, 55, 60}) shot(v, true);
+  shot(48.5, false)->cancelled = true;
+  shot(46, false)->decided = false;
+  shot(44, true)->failed = true;
+  r.bracketed = true, r.lo_mps = 47, r.hi_mps = 48;
+  OutcomeBand b = outcome_band(r);
+  EXPECT_EQ(b.v50_pairs, 3);
+  EXPECT_DOUBLE_EQ(b.v50, 49.0);
+  EXPECT_DOUBLE_EQ(b.v50_spread, 10.0);
+  EXPECT_FALSE(b.threshold);  // 48 perforated below the stop at 49
+  const auto j = nlohmann::json::parse(limit_json(r, LimitOptions{}, "s", {}));
+  EXPECT_DOUBLE_EQ(j["v50_mps"].get<double>(), 49.0);
+  EXPECT_EQ(j["v50_pairs"], 3);
+  EXPECT_DOUBLE_EQ(j["v50_spread_mps"].get<double>(), 10.0);
+  EXPECT_NE(j["v50_note"].get<std::string>().find("MIL-STD-662F"), std::string::npos);
+  // Fewer runs on one side: as many pairs as that side has (one stop: 49 and 48).
+  r.runs.erase(r.runs.begin(), r.runs.begin() + 3);
+  b = outcome_band(r);
+  EXPECT_EQ(b.v50_pairs, 1);
+  EXPECT_DOUBLE_EQ(b.v50, 48.5);
+  EXPECT_DOUBLE_EQ(b.v50_spread, 1.0);
+  // No stop at all: no V50, null in limit.json.
+  r.runs.erase(r.runs.begin());
+  b = outcome_band(r);
+  EXPECT_EQ(b.v50_pairs, 0);
+  EXPECT_LT(b.v50, 0);
+  const auto none = nlohmann::json::parse(limit_json(r, LimitOptions{}, "s", {}));
+  EXPECT_TRUE(none["v50_mps"].is_null());
+  EXPECT_TRUE(none["v50_spread_mps"].is_null());
+}
+
 // The real thing on the cheap scene: the bracket's ends are runs that did (not) perforate,
 // and the search stops at the tolerance.
 TEST(BallisticLimit, CheapSceneBracketsAndConverges) {
