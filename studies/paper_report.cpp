@@ -20,6 +20,12 @@ std::string outcomes_cell(const LimitResult& r) {
   if (b.threshold) return "threshold";
   return "alternate " + num(b.lowest_perforation, "%.1f") + " - " + num(b.highest_stop, "%.1f");
 }
+// The V50 of its decided runs (limit.json's v50_mps), with the pairs averaged.
+std::string v50_cell(const LimitResult& r) {
+  const OutcomeBand b = outcome_band(r);
+  if (b.v50 < 0) return "-";
+  return num(b.v50, "%.1f") + " (" + std::to_string(b.v50_pairs) + "+" + std::to_string(b.v50_pairs) + ")";
+}
 }  // namespace
 
 void make_charts(PaperState& ps) {
@@ -273,7 +279,7 @@ void write_report(PaperState& ps) {
        << stem << ".csv)\n\n";
 
   md << "## Ballistic limits\n\n| model | BL (m/s) | bracket (m/s) | runs | search wall time (s) | started at (m/s) "
-        "| search | outcomes |\n|---|---|---|---|---|---|---|---|\n";
+        "| search | outcomes | V50 (m/s) |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : ps.limits) {
     std::string lab = e.label;
     for (char& ch : lab)
@@ -285,14 +291,14 @@ void write_report(PaperState& ps) {
          << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | "
          << (std::isfinite(e.start_mps) ? num(e.start_mps, "%.1f") + " (" + e.start_from + ")"
                                         : std::string("(resumed)"))
-         << " | " << e.result.method << " | " << outcomes_cell(e.result) << " |\n";
+         << " | " << e.result.method << " | " << outcomes_cell(e.result) << " | " << v50_cell(e.result) << " |\n";
     else
       md << "not found: "
          << (!e.error.empty()             ? e.error
              : !e.result.warnings.empty() ? e.result.warnings.front()
                                           : "")
          << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | | " << e.result.method
-         << " | |\n";
+         << " | | |\n";
   }
   md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). The searches "
         "start from a fixed tree, so the numbers do not depend on --jobs: mu = 0.2 and 0.4 at the Lambert-Jonas limit "
@@ -361,6 +367,8 @@ std::string claims_json(const PaperState& ps) {
       const OutcomeBand b = outcome_band(e.result);
       l["threshold"] = b.threshold;  // false: outcomes alternate from the lowest perforation to the highest stop
       if (!b.threshold) l["band_mps"] = {b.lowest_perforation, b.highest_stop};
+      // The V50 of ballistic testing (limit.json's v50_mps: MIL-STD-662F, up to 3 + 3 runs).
+      l["v50_mps"] = b.v50 >= 0 ? json(b.v50) : json(nullptr);
     }
     l["method"] = e.result.method;
     if (!e.error.empty()) l["error"] = e.error;

@@ -41,7 +41,7 @@ bad=$(grep -E '^\| [0-9, ]+ \| ' "$report" | grep -vcE '\*\*(agrees|partly|diffe
 [ "$bad" -eq 0 ] || fail "$bad statement rows without a verdict"
 grep -q 'J of it before the first yarn broke' "$report" || fail "the friction work is not split at the first break"
 grep -q 'first yarn breaks at' "$report" || fail "no first-break times beside the perforation times"
-grep -q '| started at (m/s) | search | outcomes |' "$report" || fail "the limit table does not say where each search started, how it searched and whether outcomes were a threshold"
+grep -q '| started at (m/s) | search | outcomes | V50 (m/s) |' "$report" || fail "the limit table does not say where each search started, how it searched, whether outcomes were a threshold and the V50"
 for stem in fig13_energy_vs_velocity_friction fig14_velocity_history fig16_ballistic_limit_vs_friction; do
   for ext in png svg csv; do
     [ -s "$out/charts/$stem.$ext" ] || fail "missing charts/$stem.$ext"
@@ -70,6 +70,8 @@ for l in j["limits"]:
         assert l["method"] == "fast", l
         assert isinstance(l["threshold"], bool), l
         assert l["threshold"] or l["band_mps"][0] <= l["hi_mps"] + 1e-9, l
+        # A bracket has a stop and a perforation, so it has a V50 (MIL-STD-662F).
+        assert l["v50_mps"] is not None, l
 for l in j["limits"]:  # the paper's stated limits (71 m/s at mu = 0.1, 70 at 0.2) go with them
     paper = {0.1: 71, 0.2: 70}.get(l["mu"])
     assert l.get("paper_mps") == paper and (paper is None or l["paper_tolerance"] == 0.1), l
