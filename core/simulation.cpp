@@ -67,8 +67,8 @@ constexpr double kCaught_s = 100e-6;
 // kPassWindow_s) travel further than the fabric's largest half-size from the strike point
 // before stopping, has done so for kPassHold_s, and no node on it is held to a clamp by
 // unbroken elements: only yarns held by friction drag it, and the longest of them is pulled
-// out of the weave within that distance. The share is the caught rule's, so that the two
-// rules leave no gap: with 2 % (until 2026-12-06) a projectile coasting at 1-2 % of its
+// out of the weave within that distance. The share is the caught rule's, so that no speed is
+// left to neither rule's speed test: with 2 % (until 2026-12-06) a projectile coasting at 1-2 % of its
 // impact speed with no drag at all ran to solver.max_end_time_us undecided (mu = 0.02 at
 // 50 m/s on the default scene: 0.72 m/s from 1.2 to 5 ms, carrying the ravelled pole warp).
 constexpr double kPassSpeed = kCaughtSpeed;

@@ -731,9 +731,10 @@ std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std:
     j["v50_spread_mps"] = b.v50_spread >= 0 ? nlohmann::ordered_json(b.v50_spread) : nlohmann::ordered_json(nullptr);
     std::snprintf(note, sizeof note,
                   "V50 of ballistic testing (MIL-STD-662F): the mean of the %d highest stops and the %d lowest "
-                  "perforations among the decided runs, spread %.2f m/s; the search places no run for it, so it is "
-                  "as good as the runs near the bracket",
-                  b.v50_pairs, b.v50_pairs, std::max(0.0, b.v50_spread));
+                  "perforations among the decided runs (not failed or cancelled), spread %.2f m/s%s; the search "
+                  "places no run for it, so it is as good as the runs near the bracket",
+                  b.v50_pairs, b.v50_pairs, std::max(0.0, b.v50_spread),
+                  b.v50_pairs < kV50Pairs ? ", fewer pairs than the usual 3" : "");
     j["v50_note"] = b.v50 >= 0 ? std::string(note) : std::string("no V50: no decided run stopped, or none perforated");
   }
   j["error_mps"] = r.error_mps >= 0 ? nlohmann::ordered_json(r.error_mps) : nlohmann::ordered_json(nullptr);

@@ -162,10 +162,11 @@ struct LimitResult {
 //
 // With it the V50 of ballistic testing (MIL-STD-662F, "V50 ballistic test for armor"): the
 // mean of an equal number of the highest stops (partial penetrations) and the lowest
-// perforations (complete penetrations), here up to kV50Pairs of each, from the same decided
-// runs; `v50_spread` is the range of the velocities averaged. Where outcomes alternate it is
-// a robust middle of the band, which the lowest perforation (the limit of SPEC section 8) is
-// not; the search places no run for it.
+// perforations (complete penetrations), here up to kV50Pairs of each, from the same runs
+// (decided, not failed or cancelled); `v50_spread` is the range of the velocities averaged.
+// It is the mean of the runs nearest the limit on each side, not necessarily inside the
+// band (a stopped fit run far above the bracket counts too), and the search places no run
+// for it.
 constexpr int kV50Pairs = 3;
 struct OutcomeBand {
   double lowest_perforation = -1;  // -1: no run perforated

@@ -300,7 +300,9 @@ void write_report(PaperState& ps) {
          << " | | " << e.result.runs.size() << " | " << num(e.result.wall_time_s, "%.0f") << " | | " << e.result.method
          << " | | |\n";
   }
-  md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). The searches "
+  md << "\nBL = midpoint of the final bracket (highest velocity that did not perforate, lowest that did). V50 = the "
+        "V50 of ballistic testing (MIL-STD-662F): the mean of the k highest stops and k lowest perforations of the "
+        "search's runs, (k+k), up to 3 of each; no run is placed for it. The searches "
         "start from a fixed tree, so the numbers do not depend on --jobs: mu = 0.2 and 0.4 at the Lambert-Jonas limit "
         "fitted to their velocity-study runs; below 0.2, two chains from 0.2's limit (0.1, then 0.06 from 0.1; 0.02, "
         "then 0 from 0.02); above, each from the next lower friction, the pin-jointed model from the highest (with no "

@@ -222,12 +222,14 @@ int limit_report(const CommonArgs& a, const Scene& scene, const studies::LimitRe
   if (resumed)
     std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
   if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
-  if (const auto band = studies::outcome_band(r); !band.threshold)
+  const auto band = studies::outcome_band(r);
+  if (!band.threshold)
     std::printf("  no threshold: outcomes alternate from %.2f (lowest perforation) to %.2f m/s (highest stop)\n",
                 band.lowest_perforation, band.highest_stop);
-  if (const auto band = studies::outcome_band(r); band.v50 >= 0)
-    std::printf("  V50 %.2f m/s: mean of the %d highest stops and %d lowest perforations (spread %.2f m/s)\n", band.v50,
-                band.v50_pairs, band.v50_pairs, band.v50_spread);
+  if (band.v50 >= 0)
+    std::printf("  V50 %.2f m/s: mean of the %d highest stop%s and %d lowest perforation%s (spread %.2f m/s)\n",
+                band.v50, band.v50_pairs, band.v50_pairs == 1 ? "" : "s", band.v50_pairs,
+                band.v50_pairs == 1 ? "" : "s", band.v50_spread);
   if (r.fit.ok)
     std::printf("  Lambert-Jonas: a = %.3f, p = %.3f, Vbl = %.2f m/s (rms %.2f m/s over %d points)\n", r.fit.a, r.fit.p,
                 r.fit.vbl_mps, r.fit.rms_mps, r.fit.points);

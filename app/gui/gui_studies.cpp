@@ -275,12 +275,13 @@ void limit_window(GuiApp& app) {
     ImGui::TextDisabled("%s search, %d run%s in flight, %d rounds, %d moot runs stopped, %.0f s",
                         s.result.method.c_str(), s.result.jobs, s.result.jobs == 1 ? "" : "s", s.result.rounds,
                         s.result.runs_cancelled, s.result.wall_time_s);
-    if (const auto band = studies::outcome_band(s.result); s.result.bracketed && !band.threshold)
+    const auto band = studies::outcome_band(s.result);
+    if (s.result.bracketed && !band.threshold)
       ImGui::TextColored(kBad, "no threshold: outcomes alternate from %.1f to %.1f m/s", band.lowest_perforation,
                          band.highest_stop);
-    if (const auto band = studies::outcome_band(s.result); band.v50 >= 0)
-      ImGui::TextDisabled("V50 %.1f m/s (%d highest stops, %d lowest perforations)", band.v50, band.v50_pairs,
-                          band.v50_pairs);
+    if (s.result.bracketed && band.v50 >= 0)
+      ImGui::TextDisabled("V50 %.1f m/s (mean of %d + %d runs, spread %.1f m/s)", band.v50, band.v50_pairs,
+                          band.v50_pairs, band.v50_spread);
     if (s.result.fit.ok)
       ImGui::TextDisabled("Lambert-Jonas fit: %.1f m/s (a %.2f, p %.2f)", s.result.fit.vbl_mps, s.result.fit.a,
                           s.result.fit.p);

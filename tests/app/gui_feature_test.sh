@@ -208,7 +208,7 @@ for k in ("method", "jobs", "tolerance_mps", "v50_pairs"):
         raise SystemExit(f"FAIL: {k}: app {a.get(k)!r}, ravel limit {b.get(k)!r}")
 if a["ballistic_limit_mps"] is None or b["ballistic_limit_mps"] is None:
     raise SystemExit(f"FAIL: no limit: app {a['ballistic_limit_mps']}, ravel limit {b['ballistic_limit_mps']}")
-if a["v50_mps"] is None or abs(a["v50_mps"] - b["v50_mps"]) > 1e-9:
+if a["v50_mps"] is None or b["v50_mps"] is None or abs(a["v50_mps"] - b["v50_mps"]) > 1e-9:
     raise SystemExit(f"FAIL: V50: app {a['v50_mps']}, ravel limit {b['v50_mps']}")
 err = max(a["error_mps"], b["error_mps"])
 if abs(a["ballistic_limit_mps"] - b["ballistic_limit_mps"]) > err + 1e-9:

@@ -91,8 +91,6 @@ TEST(Perforation, ACoastingProjectileIsDecidedPassing) {
   const double vr = s.residual_velocity_mps;
   EXPECT_GT(vr, 0.01 * v0);
   EXPECT_LT(vr, 0.02 * v0);
-  EXPECT_EQ(s.broken_warp_yarns, 0);
-  EXPECT_EQ(s.broken_weft_yarns, 1);  // the clamped weft in the symmetry plane
   EXPECT_LT(s.perforation_time_s, 2.0e-3);
   int rows = 0;
   for (const HistoryRow& r : sim.history()) {
