@@ -467,6 +467,10 @@ const std::vector<FastRuleInfo>& fast_rule_table() {
       {"probe_below", &FastRules::probe_below,
        "once converged, runs at hi x (1 - k probe_step), k = 1 .. probe_count: a perforation below the bracket "
        "moves it down (the limit is the lowest velocity that perforates)"},
+      {"probe_gaps", &FastRules::probe_gaps,
+       "with probe_below: the stopped runs below the bracket stand for probes, which fill only the gaps wider "
+       "than probe_step x hi down to lo x (1 - probe_count probe_step), the fixed probes' spacing; they may start "
+       "in slots the bracket has no use for once it is narrower than one probe step"},
       {"decide_passing", &FastRules::decide_passing,
        "a run ends as perforated once the projectile is passing through (solver.decide_passing: held only by "
        "yarns with no intact path to a clamp, and at its present drag it would travel further than the fabric's "

@@ -204,6 +204,7 @@ class Engine {
     if (r.two_sided_start && jobs_ > 1) res_.rules.push_back("two_sided_start");
     if (r.reuse_fit_points && with_fit) res_.rules.push_back("reuse_fit_points");
     if (r.probe_below && opt.probe_count > 0) res_.rules.push_back("probe_below");
+    if (r.probe_below && opt.probe_count > 0 && r.probe_gaps) res_.rules.push_back("probe_gaps");
     if (r.decide_passing) res_.rules.push_back("decide_passing");  // (the runner's scene: add_rule_overrides)
     res_.method = "fast";
     res_.jobs = jobs_;
@@ -457,7 +458,8 @@ class Engine {
       }
       if (int(out.size()) >= free) return out;
     }
-    // Once converged: the probes below the bracket (FastRules::probe_below), long runs first.
+    // Once converged (with probe_gaps, once the bracket has no use for a slot and is narrower
+    // than a probe step): the probes below the bracket (FastRules::probe_below), long runs first.
     for (const double v : missing_probes()) {
       if (int(out.size()) >= free) return out;
       if (!planned(out, v, probe_near(v))) out.push_back({v, "probe"});
@@ -478,16 +480,58 @@ class Engine {
     }
     return out;
   }
-  // The probes below a converged bracket still to make: none in flight or made within
-  // probe_near of each (a run there, of any purpose, stands for it).
+  // The probes below the bracket still to make, highest first. Fixed (probe_gaps off): at
+  // hi x (1 - k probe_step) once converged, none in flight or made within probe_near of each
+  // (a run there, of any purpose, stands for it). By gaps: see probe_gaps_left.
   static double probe_near(double v) { return 0.01 * v; }
   std::vector<double> missing_probes() const {
     std::vector<double> out;
-    if (!opt_.rules.probe_below || !converged() || failed_) return out;
+    if (!opt_.rules.probe_below || !bracketed() || failed_) return out;
+    if (opt_.rules.probe_gaps) return probe_gaps_left();
+    if (!converged()) return out;
     for (int k = 1; k <= opt_.probe_count; ++k) {
       const double v = hi_ * (1 - k * opt_.probe_step);
       if (v < opt_.min_mps || v >= lo_) continue;
       if (!in_use(v, probe_near(v))) out.push_back(v);
+    }
+    return out;
+  }
+  // FastRules::probe_gaps: walking down from lo, every run below it that did not perforate
+  // (finished, or a probe in flight) is a sample; where no sample lies within probe_step x hi
+  // (plus twice probe_near: the fixed probes' stand-ins may lie 1 % off each, so they leave
+  // gaps up to that wide) below the last, a probe goes
+  // one step down, not below lo x (1 - probe_count probe_step), until a sample lies within
+  // probe_near of that bottom. So no stretch below the bracket down there is left wider than
+  // the fixed probes leave it, and a bisection run already there saves a probe. Before
+  // convergence only once the bracket is narrower than one step: hi then falls by less than
+  // a step, which moves the step by under 0.25 % of hi, inside the slack, and the bottom, set
+  // from lo, only up.
+  std::vector<double> probe_gaps_left() const {
+    std::vector<double> out;
+    const double step = opt_.probe_step * hi_;
+    if (step <= 0 || opt_.probe_count <= 0) return out;
+    if (!converged() && hi_ - lo_ > step) return out;
+    const double bottom = std::max(lo_ * (1 - opt_.probe_count * opt_.probe_step), opt_.min_mps);
+    if (bottom >= lo_) return out;
+    std::vector<double> samples;
+    for (const auto& s : res_.runs)
+      if (usable(s) && !s.perforated && s.velocity_mps < lo_) samples.push_back(s.velocity_mps);
+    for (const auto& f : flying_)
+      if (f.purpose == "probe" && f.v < lo_) samples.push_back(f.v);
+    std::sort(samples.begin(), samples.end(), std::greater<double>());
+    double cur = lo_;
+    size_t i = 0;
+    while (cur > bottom + probe_near(bottom)) {
+      double next = -1;
+      for (; i < samples.size() && samples[i] >= cur - step - 2 * probe_near(cur); ++i)
+        if (samples[i] < cur) next = samples[i];  // the lowest sample close enough below cur
+      if (next > 0) {
+        cur = next;
+        continue;
+      }
+      // One step down, or the bottom itself where that is close enough (saves a probe).
+      cur = cur - bottom <= step + 2 * probe_near(cur) ? bottom : std::max(cur - step, bottom);
+      out.push_back(cur);
     }
     return out;
   }
@@ -628,7 +672,9 @@ class Engine {
       for (const auto& f : flying_) fit_flights += f.purpose == "fit";
       fits = std::max(0, fits - fit_flights);
       int probes = 0;
-      if (opt_.rules.probe_below) {
+      if (opt_.rules.probe_below && opt_.rules.probe_gaps) {
+        probes = int(missing_probes().size());
+      } else if (opt_.rules.probe_below) {
         probes = opt_.probe_count;
         for (const auto& f : flying_) probes -= f.purpose == "probe";
         for (const auto& s : res_.runs) probes -= s.purpose == "probe" && !s.cancelled;

@@ -234,16 +234,32 @@ TEST(FastLimit, AllRulesMatchTheReference) {
   }
 }
 
-// The answer of a search with probe_below stands on a stopped full run within 1 % of each
-// probe velocity below its bracket.
+// The answer of a search with probe_below stands on stopped full runs below its bracket.
+// Fixed probes (probe_gaps off): one within 1 % of each probe velocity hi x (1 - k step).
+// By gaps: from lo down to lo x (1 - count step) no two neighbouring stopped runs are more
+// than step x hi apart (plus 2 % of the upper one: fixed probes' stand-ins may lie 1 % off each),
+// and the lowest lies within 1 % of that velocity or below it.
 void expect_probes_stopped(const LimitResult& r, const LimitOptions& o) {
-  for (int k = 1; k <= o.probe_count; ++k) {
-    const double v = r.hi_mps * (1 - k * o.probe_step);
-    bool stopped_there = false;
-    for (const auto& s : r.runs)
-      stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
-    EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
+  if (!o.rules.probe_gaps) {
+    for (int k = 1; k <= o.probe_count; ++k) {
+      const double v = r.hi_mps * (1 - k * o.probe_step);
+      bool stopped_there = false;
+      for (const auto& s : r.runs)
+        stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
+      EXPECT_TRUE(stopped_there) << "no stopped run within 1 % of the probe at " << v << " m/s";
+    }
+    return;
   }
+  const double step = o.probe_step * r.hi_mps, bottom = r.lo_mps * (1 - o.probe_count * o.probe_step);
+  std::vector<double> stops;
+  for (const auto& s : r.runs)
+    if (!s.cancelled && s.decided && !s.perforated && s.velocity_mps <= r.lo_mps) stops.push_back(s.velocity_mps);
+  std::sort(stops.begin(), stops.end(), std::greater<double>());
+  ASSERT_FALSE(stops.empty());
+  EXPECT_DOUBLE_EQ(stops.front(), r.lo_mps);
+  for (size_t i = 0; i + 1 < stops.size() && stops[i] > bottom * 1.01; ++i)
+    EXPECT_LE(stops[i] - stops[i + 1], step + 0.02 * stops[i] + 1e-9) << "a gap below the bracket at " << stops[i];
+  EXPECT_LE(stops.back(), bottom * 1.01) << "no stopped run down at the lowest probe, " << bottom << " m/s";
 }
 
 // Outcomes that are not a threshold (measured on the default scene at mu = 1.0: 80 and 85
@@ -269,22 +285,90 @@ TEST(FastLimit, ProbesBelowFindTheLowestPerforation) {
   ASSERT_TRUE(np.converged);
   EXPECT_GT(np.lo_mps, 88.0);  // without probes: a crossing above the lower band
   o.rules.probe_below = true;
-  const auto f = simulate_fast_search(t, o, false);
-  ASSERT_TRUE(f.converged);
-  EXPECT_GE(f.hi_mps, 80.0);
-  EXPECT_LE(f.hi_mps, 81.0);
-  EXPECT_LT(f.lo_mps, 80.0);
-  EXPECT_NE(std::find(f.rules.begin(), f.rules.end(), "probe_below"), f.rules.end());
-  // The answer stands on every probe below it having stopped.
-  expect_probes_stopped(f, o);
-  // The runs above the lower band that stopped say the outcome is no threshold; the band
-  // reaches from the answer's perforation to the highest of them.
-  const auto band = outcome_band(f);
-  EXPECT_FALSE(band.threshold);
-  EXPECT_DOUBLE_EQ(band.lowest_perforation, f.hi_mps);
-  EXPECT_GE(band.highest_stop, 88.0);
-  EXPECT_LT(band.highest_stop, 101.5);
-  EXPECT_GE(band.against, 1);
+  for (const bool gaps : {true, false}) {
+    SCOPED_TRACE(gaps ? "probe_gaps" : "fixed probes");
+    o.rules.probe_gaps = gaps;
+    const auto f = simulate_fast_search(t, o, false);
+    ASSERT_TRUE(f.converged);
+    EXPECT_GE(f.hi_mps, 80.0);
+    EXPECT_LE(f.hi_mps, 81.0);
+    EXPECT_LT(f.lo_mps, 80.0);
+    EXPECT_NE(std::find(f.rules.begin(), f.rules.end(), "probe_below"), f.rules.end());
+    // The answer stands on every probe below it having stopped.
+    expect_probes_stopped(f, o);
+    // The runs above the lower band that stopped say the outcome is no threshold; the band
+    // reaches from the answer's perforation to the highest of them.
+    const auto band = outcome_band(f);
+    EXPECT_FALSE(band.threshold);
+    EXPECT_DOUBLE_EQ(band.lowest_perforation, f.hi_mps);
+    EXPECT_GE(band.highest_stop, 88.0);
+    EXPECT_LT(band.highest_stop, 101.5);
+    EXPECT_GE(band.against, 1);
+  }
+}
+
+// A threshold whose perforating runs leave with a residual velocity of at least `jump` (the
+// default scene at mu = 0.2: 79.92 m/s perforates at 11.1 m/s, 79.07 m/s stops): the
+// Lambert-Jonas guess through the lowest perforations lies below the limit, so the
+// bisection leaves stopped runs below the bracket.
+ShootFn target_jump(double a, double vbl, double jump) {
+  return [=](double v, const std::string&) {
+    Shot s;
+    s.perforated = v >= vbl;
+    s.residual_velocity_mps = s.perforated ? std::sqrt(a * a * (v * v - vbl * vbl) + jump * jump) : 0;
+    s.end_reason = s.perforated ? "perforated" : "rebounded";
+    s.wall_time_s = slow_near(vbl)(v);
+    return s;
+  };
+}
+
+// Rule probe_gaps: the bisection's stopped runs below the bracket stand for probes, so the
+// probes sample the same stretch below the bracket (no gap wider than a probe step) with no
+// more runs than the fixed probes, and with fewer where the bisection left stops there (the
+// residual-jump targets); the same answers, in less time on the clock.
+TEST(FastLimit, ProbeGapsLetBisectionRunsStandForProbes) {
+  struct Case {
+    ShootFn t;
+    double vbl;
+    bool jump;
+  };
+  std::vector<Case> cases;
+  for (const Law& law : kLaws) cases.push_back({target(law.a, law.p, law.vbl, slow_near(law.vbl)), law.vbl, false});
+  for (double vbl : {44.1, 65.5, 79.5, 107.7}) cases.push_back({target_jump(0.95, vbl, 0.14 * vbl), vbl, true});
+  double gaps_s = 0, fixed_s = 0;
+  int gaps_probes = 0, fixed_probes = 0, jump_gaps_probes = 0, jump_fixed_probes = 0;
+  for (const Case& c : cases)
+    for (int jobs : {1, 2}) {
+      SCOPED_TRACE("vbl " + std::to_string(c.vbl) + (c.jump ? " (jump)" : "") + " jobs " + std::to_string(jobs));
+      const auto& t = c.t;
+      const double vbl = c.vbl;
+      const auto ref = find_ballistic_limit(t, LimitOptions{}, true);
+      LimitOptions o;
+      o.jobs = jobs;
+      o.rules.decide_passing = false;
+      const auto g = simulate_fast_search(t, o, true);
+      expect_same_answer(g, ref, vbl, 1.0);
+      expect_probes_stopped(g, o);
+      EXPECT_NE(std::find(g.rules.begin(), g.rules.end(), "probe_gaps"), g.rules.end());
+      o.rules.probe_gaps = false;
+      const auto f = simulate_fast_search(t, o, true);
+      expect_same_answer(f, ref, vbl, 1.0);
+      expect_probes_stopped(f, o);
+      EXPECT_EQ(std::find(f.rules.begin(), f.rules.end(), "probe_gaps"), f.rules.end());
+      int gp = 0, fp = 0;
+      for (const auto& s : g.runs) gp += s.purpose == "probe" && !s.cancelled;
+      for (const auto& s : f.runs) fp += s.purpose == "probe" && !s.cancelled;
+      EXPECT_LE(gp, fp);
+      gaps_probes += gp;
+      fixed_probes += fp;
+      if (c.jump) jump_gaps_probes += gp, jump_fixed_probes += fp;
+      gaps_s += g.wall_time_s;
+      fixed_s += f.wall_time_s;
+    }
+  EXPECT_LT(jump_gaps_probes, jump_fixed_probes);
+  EXPECT_LT(gaps_s, fixed_s);
+  std::printf("probe_gaps: %d probes (%d on the jump targets), %.1f s on the clock; fixed probes: %d (%d), %.1f s\n",
+              gaps_probes, jump_gaps_probes, gaps_s, fixed_probes, jump_fixed_probes, fixed_s);
 }
 
 // Undecided runs are left out of the bracket (as the reference does), and a failed run
