@@ -293,8 +293,9 @@ std::vector<KeyDef> make_defs() {
        "paper's velocity-only correction",
        solver.split_penetration);
   BOOL("solver.decide_passing",
-       "true: end the run as perforated once the projectile is passing through (held only by yarns with no intact "
-       "path to a clamp, above 1 % of its impact speed, and at its present drag it would travel further than the "
+       "true: end the run as perforated once the projectile is passing through (some element broken, held only by "
+       "yarns with no intact path to a clamp, above 1 % of its impact speed, and at its present drag it would travel "
+       "further than the "
        "fabric's largest half-size before stopping, for 100 us); the fast limit search sets it (docs/MODEL.md §8)",
        solver.decide_passing);
   BOOL("solver.projectile_holds",

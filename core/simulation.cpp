@@ -323,7 +323,12 @@ struct Simulation::Impl {
   bool passing() {
     const Model& m = model();
     const double v = forward_velocity(), t = solver->time();
-    if (!solver->had_contact() || v < kPassSpeed * m.impact_velocity) {
+    // Not before the first element breaks: an intact fabric is clamped through every yarn,
+    // and the projectile passes it only once yarns break or slip aside, the latter seen by
+    // the perforation test. Its drag grows from zero as the fabric deflects, so early in
+    // contact the drag test alone would pass any slow strike; and a free yarn it touches,
+    // pressed onto clamped yarns, is held by their normal force, not by friction.
+    if (!solver->had_contact() || v < kPassSpeed * m.impact_velocity || first_break_time < 0) {
       pass_track.clear();
       passing_since = -1;
       return false;

@@ -472,8 +472,9 @@ const std::vector<FastRuleInfo>& fast_rule_table() {
        "than probe_step x hi down to lo x (1 - probe_count probe_step), the fixed probes' spacing; they may start "
        "in slots the bracket has no use for once it is narrower than one probe step"},
       {"decide_passing", &FastRules::decide_passing,
-       "a run ends as perforated once the projectile is passing through (solver.decide_passing: held only by "
-       "yarns with no intact path to a clamp, and at its present drag it would travel further than the fabric's "
+       "a run ends as perforated once the projectile is passing through (solver.decide_passing: some element "
+       "broken, held only by yarns with no intact path to a clamp, and at its present drag it would travel further "
+       "than the fabric's "
        "half-size before stopping); its residual velocity is the speed then"}};
   return t;
 }
