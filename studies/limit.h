@@ -76,16 +76,17 @@ struct FastRules {
   // search goes on there; the answer stands once every probe below it stopped.
   bool probe_below = true;
   // With probe_below: the probes sample the velocities below the bracket no coarser than the
-  // fixed probes would (gaps of at most probe_step x hi, down to hi x (1 - probe_count
-  // probe_step)), and a run of the search already there stands for a probe: the stopped
-  // bisection runs below the bracket count, so a probe is made only where they leave a gap.
+  // fixed probes would (gaps of at most probe_step x hi plus the 2 % the fixed probes' stand-ins
+  // may leave, down to lo x (1 - probe_count probe_step)), and a run of the search already
+  // there stands for a probe: the stopped bisection runs below the bracket count, so a probe
+  // is made only where they leave a gap.
   // Probes also take slots the bracket has no use for once it is narrower than one probe
   // step, before it reaches the tolerance. Off: probes at the fixed hi x (1 - k probe_step),
   // each stood for only by a run within 1 % of it, once the bracket has converged.
   bool probe_gaps = true;
   // Runs end as perforated once the projectile is passing through (the scene key
-  // solver.decide_passing, docs/MODEL.md §8): held only by yarns with no intact path to a
-  // clamp, and at its present drag it would travel further than the fabric's largest half-size
+  // solver.decide_passing, docs/MODEL.md §8): after some element broke, held only by yarns
+  // with no intact path to a clamp, and at its present drag it would travel further than the fabric's largest half-size
   // before stopping. Near the limit a perforating run otherwise drags the free yarns through
   // the weave for another millisecond at an almost constant speed.
   bool decide_passing = true;
