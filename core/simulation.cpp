@@ -412,9 +412,9 @@ struct Simulation::Impl {
         count_breaks(&broken_before_perforation, &broken_near_clamp);
         friction_at_perforation = solver->ledger().friction_work_J;
         finish(RunStatus::completed, EndReason::perforated,
-               "the projectile is passing through the fabric: held only by yarns with no intact path to a clamp, "
-               "and at its present drag it would travel further than the fabric's half-size before stopping "
-               "(solver.decide_passing)");
+               "the projectile is passing through the fabric: yarns have broken, it is held only by yarns with no "
+               "intact path to a clamp, and at its present drag it would travel further than the fabric's half-size "
+               "before stopping (solver.decide_passing)");
         return false;
       }
       if (solver->had_contact() && forward_velocity() < 0) {

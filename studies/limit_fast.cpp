@@ -505,12 +505,13 @@ class Engine {
   // the fixed probes leave it, and a bisection run already there saves a probe. Before
   // convergence only once the bracket is narrower than one step: hi then falls by less than
   // a step, which moves the step by under 0.25 % of hi, inside the slack, and the bottom, set
-  // from lo, only up.
-  std::vector<double> probe_gaps_left() const {
+  // from lo, only up. `now` false: the probes the present samples would leave, even before
+  // they may start (the ETA's estimate).
+  std::vector<double> probe_gaps_left(bool now = true) const {
     std::vector<double> out;
     const double step = opt_.probe_step * hi_;
     if (step <= 0 || opt_.probe_count <= 0) return out;
-    if (!converged() && hi_ - lo_ > step) return out;
+    if (now && !converged() && hi_ - lo_ > step) return out;
     const double bottom = std::max(lo_ * (1 - opt_.probe_count * opt_.probe_step), opt_.min_mps);
     if (bottom >= lo_) return out;
     std::vector<double> samples;
@@ -673,7 +674,9 @@ class Engine {
       fits = std::max(0, fits - fit_flights);
       int probes = 0;
       if (opt_.rules.probe_below && opt_.rules.probe_gaps) {
-        probes = int(missing_probes().size());
+        // The gaps the samples leave now (before the bracket is narrower than a step none may
+        // start yet, but they will be needed unless bisection runs land in them).
+        probes = failed_ ? 0 : int(probe_gaps_left(false).size());
       } else if (opt_.rules.probe_below) {
         probes = opt_.probe_count;
         for (const auto& f : flying_) probes -= f.purpose == "probe";
