@@ -220,6 +220,8 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["broken_weft_elements"] = s.broken_weft;
   j["broken_warp_yarns"] = s.broken_warp_yarns;
   j["broken_weft_yarns"] = s.broken_weft_yarns;
+  j["broken_warp_lines"] = s.broken_warp_lines;
+  j["broken_weft_lines"] = s.broken_weft_lines;
   j["max_strain"] = s.max_strain;
   j["warnings"] = s.warnings;
   return j.dump(2) + "\n";

@@ -412,9 +412,9 @@ struct Simulation::Impl {
         count_breaks(&broken_before_perforation, &broken_near_clamp);
         friction_at_perforation = solver->ledger().friction_work_J;
         finish(RunStatus::completed, EndReason::perforated,
-               "the projectile is passing through the fabric: yarns have broken, it is held only by yarns with no "
-               "intact path to a clamp, and at its present drag it would travel further than the fabric's half-size "
-               "before stopping (solver.decide_passing)");
+               "the projectile is passing through the fabric: a yarn element has broken, it is held only by yarns "
+               "with no intact path to a clamp, and at its present drag it would travel further than the fabric's "
+               "half-size before stopping (solver.decide_passing)");
         return false;
       }
       if (solver->had_contact() && forward_velocity() < 0) {
@@ -705,7 +705,12 @@ Summary Simulation::summary() const {
     const bool mirrored = is_warp ? m.mirror_x : m.mirror_y;
     const int count = mirrored && m.yarn_grid[y] != 0 ? 2 : 1;
     (is_warp ? s.broken_warp_yarns : s.broken_weft_yarns) += count;
+    auto& lines = is_warp ? s.broken_warp_lines : s.broken_weft_lines;
+    lines.push_back(m.yarn_grid[y]);
+    if (count == 2) lines.push_back(-m.yarn_grid[y]);
   }
+  std::sort(s.broken_warp_lines.begin(), s.broken_warp_lines.end());
+  std::sort(s.broken_weft_lines.begin(), s.broken_weft_lines.end());
   double ms = 0;
   for (const auto& r : I.history) ms = std::max(ms, r.max_strain);
   s.max_strain = ms;

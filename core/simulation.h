@@ -81,6 +81,10 @@ struct Summary {
   double node_steps_per_s = 0;
   int broken_warp = 0, broken_weft = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;  // yarns with at least one broken element
+  // ... and their grid lines, ascending: the warp at x = I L0, the weft at y = J L0, counted
+  // from the strike point's line (0) over the whole fabric; a modelled yarn off a symmetry
+  // plane stands for its mirror images too (I and -I).
+  std::vector<int> broken_warp_lines, broken_weft_lines;
   double max_strain = 0;
   std::vector<std::string> warnings;
 };

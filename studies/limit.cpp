@@ -358,6 +358,8 @@ nlohmann::ordered_json shot_to_json(const Shot& s) {
   if (s.failed) q["error"] = s.error;
   q["broken_warp_yarns"] = s.broken_warp_yarns;
   q["broken_weft_yarns"] = s.broken_weft_yarns;
+  q["broken_warp_lines"] = s.broken_warp_lines;
+  q["broken_weft_lines"] = s.broken_weft_lines;
   q["wall_time_s"] = s.wall_time_s;
   if (s.cancelled) {
     q["cancelled"] = true;
@@ -389,6 +391,16 @@ Shot shot_from_json(const nlohmann::json& q) {
   s.error = q.value("error", "");
   s.broken_warp_yarns = q.value("broken_warp_yarns", 0);
   s.broken_weft_yarns = q.value("broken_weft_yarns", 0);
+  // (absent in files written before 2026-12-06; a non-list is read as none)
+  auto lines = [&](const char* k) {
+    std::vector<int> out;
+    if (q.contains(k) && q[k].is_array())
+      for (const auto& v : q[k])
+        if (v.is_number_integer()) out.push_back(v.get<int>());
+    return out;
+  };
+  s.broken_warp_lines = lines("broken_warp_lines");
+  s.broken_weft_lines = lines("broken_weft_lines");
   s.wall_time_s = num("wall_time_s", 0);
   s.cancelled = q.value("cancelled", false);
   s.cancel_reason = q.value("cancel_reason", "");
@@ -552,6 +564,8 @@ RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>
     shot.wall_time_s = s.wall_time_s;
     shot.broken_warp_yarns = s.broken_warp_yarns;
     shot.broken_weft_yarns = s.broken_weft_yarns;
+    shot.broken_warp_lines = s.broken_warp_lines;
+    shot.broken_weft_lines = s.broken_weft_lines;
     if (!kept.empty()) {  // kept for a rerun after an interruption
       prepare_output_dir(cache_dir + "/runs");
       nlohmann::ordered_json j;

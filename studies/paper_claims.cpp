@@ -37,6 +37,20 @@ FirstBreak first_break(const std::map<double, Csv>& histories, double mu) {
 
 }  // namespace
 
+std::string broken_yarns_text(const Shot& s) {
+  std::string t =
+      std::to_string(s.broken_weft_yarns) + " weft and " + std::to_string(s.broken_warp_yarns) + " warp yarns broken";
+  // Only the yarns through the strike point (grid line 0, in the symmetry planes): they
+  // cannot slip aside in a symmetric model, whatever the friction (docs/MODEL.md §9).
+  bool pole_only =
+      s.broken_weft_yarns + s.broken_warp_yarns > 0 &&
+      int(s.broken_weft_lines.size() + s.broken_warp_lines.size()) == s.broken_weft_yarns + s.broken_warp_yarns;
+  for (const auto* lines : {&s.broken_weft_lines, &s.broken_warp_lines})
+    for (int l : *lines) pole_only = pole_only && l == 0;
+  if (pole_only) t += " (only the yarns through the strike point, which a symmetric model holds on the projectile)";
+  return t;
+}
+
 EnergyPeak find_energy_peak(const Series& s, double min_fall, double window_mps) {
   EnergyPeak p;
   const int n = int(std::min(s.x.size(), s.y.size()));
@@ -298,9 +312,7 @@ void make_claims(PaperState& ps) {
     if (const LimitEntry* e = bl_of(0.02)) {
       for (const auto& s : e->result.runs)
         if (s.perforated && same(s.velocity_mps, e->result.hi_mps)) {
-          c.ravel = "lowest perforating run (" + num(s.velocity_mps, "%.1f") +
-                    " m/s): " + std::to_string(s.broken_weft_yarns) + " weft and " +
-                    std::to_string(s.broken_warp_yarns) + " warp yarns broken";
+          c.ravel = "lowest perforating run (" + num(s.velocity_mps, "%.1f") + " m/s): " + broken_yarns_text(s);
           c.verdict = s.broken_weft_yarns + s.broken_warp_yarns == 0 ? "agrees" : "differs";
         }
     }

@@ -111,6 +111,10 @@ struct EnergyPeak {
 };
 EnergyPeak find_energy_peak(const Series& s, double min_fall = 0.15, double window_mps = 60);
 
+// "1 weft and 0 warp yarns broken", and, when every broken yarn is one through the strike
+// point (grid line 0, known from the run's broken_*_lines), that a symmetric model holds those.
+std::string broken_yarns_text(const Shot& s);
+
 struct Claim {
   std::string figure, paper, ravel, verdict;  // verdict: agrees | partly | differs | not measured
 };

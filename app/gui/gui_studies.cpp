@@ -321,7 +321,7 @@ void limit_window(GuiApp& app) {
       if (r.decided_passing && ImGui::IsItemHovered())
         ImGui::SetTooltip(
             "perforated: the run ended at %.1f us, once the projectile was passing through\n"
-            "(yarns broken, held only by yarns with no intact path to a clamp; rule decide_passing)",
+            "(an element broken, held only by yarns with no intact path to a clamp; rule decide_passing)",
             r.perforation_time_s * 1e6);
       ImGui::TableNextColumn();
       ImGui::Text("%.1f", r.residual_velocity_mps);

@@ -234,7 +234,9 @@ TEST(Compression, TwoStageCrossingClosesByTheLawAndStoresItsIntegral) {
     EXPECT_GE(s->ledger().compression_loss_J, 0.0);
     // And it is not the one-stage law with the same c_min: at 30 N that one would sit within
     // a micrometre of c_min, the two-stage law ~11 um above it.
-    if (N > 10) EXPECT_GT(c - cmin, 0.5 * B / (1 + N / Ff));
+    if (N > 10) {
+      EXPECT_GT(c - cmin, 0.5 * B / (1 + N / Ff));
+    }
   }
 }
 

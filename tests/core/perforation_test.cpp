@@ -334,5 +334,30 @@ TEST(HashProbe, StateHashesAreTheRecordedOnes) {
   }
 }
 
+// The broken yarns' grid lines (Summary::broken_*_lines): the count of each family's yarns,
+// ascending, and in the quarter model every yarn off a symmetry plane listed with its mirror
+// image; the full model of the same strike breaks the same lines (quarter = full, §6).
+TEST(Perforation, BrokenYarnLinesAreTheBrokenYarnsOverTheWholeFabric) {
+  auto run = [](const char* symmetry) {
+    Simulation sim(
+        test::scene_with(test::small_patch() + std::vector<std::string>{"projectile.velocity_mps=400", symmetry}));
+    sim.run();
+    return sim.summary();
+  };
+  const Summary q = run("solver.symmetry=auto");
+  ASSERT_EQ(q.model, "quarter");
+  ASSERT_GT(q.broken_weft_yarns + q.broken_warp_yarns, 0) << "the run must break yarns to test this";
+  for (const auto* lines : {&q.broken_warp_lines, &q.broken_weft_lines}) {
+    EXPECT_TRUE(std::is_sorted(lines->begin(), lines->end()));
+    for (int l : *lines) EXPECT_EQ(std::count(lines->begin(), lines->end(), -l), 1) << l;
+  }
+  EXPECT_EQ(int(q.broken_warp_lines.size()), q.broken_warp_yarns);
+  EXPECT_EQ(int(q.broken_weft_lines.size()), q.broken_weft_yarns);
+  const Summary f = run("solver.symmetry=full");
+  EXPECT_EQ(f.model, "full");
+  EXPECT_EQ(f.broken_warp_lines, q.broken_warp_lines);
+  EXPECT_EQ(f.broken_weft_lines, q.broken_weft_lines);
+}
+
 }  // namespace
 }  // namespace ravel

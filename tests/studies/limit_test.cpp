@@ -408,6 +408,21 @@ TEST(BallisticLimit, LimitJsonStatesMethodAndErrorEstimate) {
   int back_decided = 0;
   for (const auto& s : limit_from_json(j3.dump()).runs) back_decided += s.decided_passing;
   EXPECT_EQ(back_decided, 1);
+  // The broken yarns' grid lines round-trip; a file without them (written before they were
+  // kept) reads as none.
+  LimitResult withl = r;
+  withl.runs.front().broken_weft_lines = {-2, 0, 2};
+  withl.runs.front().broken_warp_lines = {0};
+  const auto j4 = nlohmann::json::parse(limit_json(withl, o, "s", {}));
+  const auto back4 = limit_from_json(j4.dump());
+  EXPECT_EQ(back4.runs.front().broken_weft_lines, (std::vector<int>{-2, 0, 2}));
+  EXPECT_EQ(back4.runs.front().broken_warp_lines, (std::vector<int>{0}));
+  auto j5 = j4;
+  j5["runs"][0].erase("broken_weft_lines");
+  j5["runs"][0]["broken_warp_lines"] = "x";
+  const auto back5 = limit_from_json(j5.dump());
+  EXPECT_TRUE(back5.runs.front().broken_weft_lines.empty());
+  EXPECT_TRUE(back5.runs.front().broken_warp_lines.empty());
 }
 
 }  // namespace

@@ -52,5 +52,23 @@ TEST(PaperClaims, NoPeakInARisingCurveOrInSmallDips) {
   EXPECT_EQ(find_energy_peak(series({50, 70, 70, 50})).peak, 1);
 }
 
+// The mu = 0.02 claim's text (Fig. 17): the broken yarns, and whether they are only the ones
+// through the strike point, which no symmetric model can let slip aside.
+TEST(PaperClaims, BrokenYarnsThroughTheStrikePointAreNamed) {
+  Shot s;
+  s.broken_weft_yarns = 1;
+  s.broken_weft_lines = {0};
+  EXPECT_NE(broken_yarns_text(s).find("only the yarns through the strike point"), std::string::npos);
+  EXPECT_EQ(broken_yarns_text(s).rfind("1 weft and 0 warp yarns broken", 0), 0u);
+  s.broken_weft_yarns = 3;
+  s.broken_weft_lines = {-1, 0, 1};
+  EXPECT_EQ(broken_yarns_text(s).find("strike point"), std::string::npos);
+  s.broken_weft_yarns = 1;
+  s.broken_weft_lines.clear();  // a run kept before the lines were: not known, not claimed
+  EXPECT_EQ(broken_yarns_text(s).find("strike point"), std::string::npos);
+  s.broken_weft_yarns = 0;
+  EXPECT_EQ(broken_yarns_text(s), "0 weft and 0 warp yarns broken");
+}
+
 }  // namespace
 }  // namespace ravel::studies::paper_detail
