@@ -163,6 +163,19 @@ std::string short_hash(const std::string& text) {
   return b;
 }
 
+std::string line_ranges(const std::vector<int>& lines) {
+  std::string out;
+  for (size_t i = 0; i < lines.size();) {
+    size_t j = i;
+    while (j + 1 < lines.size() && lines[j + 1] <= lines[j] + 1) ++j;  // a run of consecutive lines
+    if (!out.empty()) out += ", ";
+    out += std::to_string(lines[i]);
+    if (lines[j] != lines[i]) out += ".." + std::to_string(lines[j]);
+    i = j + 1;
+  }
+  return out;
+}
+
 std::string summary_json(const Summary& s, const Scene& scene) {
   nlohmann::ordered_json j;
   j["scene"] = s.scene_name;

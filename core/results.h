@@ -31,6 +31,10 @@ std::string safe_file_name(const std::string& text);
 // from different overrides.
 std::string short_hash(const std::string& text);
 
+// Grid lines (ascending, as Summary::broken_*_lines) written as ranges: "-4..4",
+// "-6..-4, 0, 4..6"; "" when there are none.
+std::string line_ranges(const std::vector<int>& lines);
+
 // The column names of history.csv, in order (t_s first).
 std::vector<std::string> history_columns();
 std::string history_csv(const std::vector<HistoryRow>& rows);

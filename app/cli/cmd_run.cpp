@@ -109,8 +109,12 @@ void print_summary_line(const Summary& s, const std::string& out_dir) {
                 s.perforation_time_s * 1e6, s.residual_velocity_mps, s.energy_absorbed_J);
   else
     std::printf("  not perforated, energy absorbed %.2f J\n", s.energy_absorbed_J);
-  std::printf("  broken yarns: %d warp, %d weft; energy balance error %.2e\n", s.broken_warp_yarns, s.broken_weft_yarns,
-              s.energy_balance_error);
+  std::string lines;  // where they lie: grid lines from the aim point's (0)
+  if (!s.broken_warp_lines.empty()) lines += "warp lines " + line_ranges(s.broken_warp_lines);
+  if (!s.broken_weft_lines.empty())
+    lines += (lines.empty() ? "" : ", ") + ("weft lines " + line_ranges(s.broken_weft_lines));
+  std::printf("  broken yarns: %d warp, %d weft%s; energy balance error %.2e\n", s.broken_warp_yarns,
+              s.broken_weft_yarns, lines.empty() ? "" : (" (" + lines + ")").c_str(), s.energy_balance_error);
   if (s.status == RunStatus::diverged || s.status == RunStatus::interrupted) std::printf("  %s\n", s.diagnosis.c_str());
   for (const auto& w : s.warnings) std::printf("  warning: %s\n", w.c_str());
   if (!out_dir.empty()) {

@@ -244,8 +244,9 @@ bool scene_section(GuiApp& app) {
         "F_flat (docs/MODEL.md section 4).");
     ImGui::BeginDisabled(s.fabric.packed_gap_m <= s.fabric.flattened_gap_m);
     changed |= slider_si("F_flat (N)", &s.fabric.flattening_force_n, 1, 1, 500, "%.0f", true);
-    help_marker("F_flat: normal force that closes half of the flattening stage c_pack - c_min "
-                "(fabric.flattening_force_n).");
+    help_marker(
+        "F_flat: normal force that closes half of the flattening stage c_pack - c_min "
+        "(fabric.flattening_force_n).");
     ImGui::EndDisabled();
     ImGui::EndDisabled();
     ImGui::TreePop();
@@ -833,14 +834,19 @@ void draw_status_panel(GuiApp& app) {
     ImGui::TextColored(kGood, "not perforated (yet)");
   ImGui::Text("absorbed %.2f J, friction %.2f J", s.energy_absorbed_J, s.friction_work_J);
   if (ImGui::IsItemHovered())
-    ImGui::SetTooltip("yarn-yarn friction work: %.2f J up to the first break%s, %.2f J up to perforation%s, %.2f J "
-                      "over the run",
-                      s.friction_work_to_first_break_J, s.first_break_time_s >= 0 ? "" : " (none yet)",
-                      s.friction_work_to_perforation_J, s.perforated ? "" : " (not perforated)", s.friction_work_J);
+    ImGui::SetTooltip(
+        "yarn-yarn friction work: %.2f J up to the first break%s, %.2f J up to perforation%s, %.2f J "
+        "over the run",
+        s.friction_work_to_first_break_J, s.first_break_time_s >= 0 ? "" : " (none yet)",
+        s.friction_work_to_perforation_J, s.perforated ? "" : " (not perforated)", s.friction_work_J);
   if (s.first_break_time_s >= 0)
     ImGui::Text("first break %.1f \xC2\xB5s, %.1f mm from impact", s.first_break_time_s * 1e6,
                 s.first_break_distance_m * 1e3);
   ImGui::Text("broken yarns %d warp, %d weft", s.broken_warp_yarns, s.broken_weft_yarns);
+  if (ImGui::IsItemHovered() && !(s.broken_warp_lines.empty() && s.broken_weft_lines.empty()))
+    ImGui::SetTooltip("grid lines of the broken yarns, 0 through the aim point:\nwarp %s\nweft %s",
+                      s.broken_warp_lines.empty() ? "none" : line_ranges(s.broken_warp_lines).c_str(),
+                      s.broken_weft_lines.empty() ? "none" : line_ranges(s.broken_weft_lines).c_str());
   ImGui::Text("max strain %.2f %%, balance %.1e", s.max_strain * 100, s.energy_balance_error);
   if (!v.message.empty()) ImGui::TextColored(kBad, "%s", v.message.c_str());
   for (const auto& w : s.warnings) ImGui::TextColored(kWarn, "warning: %s", w.c_str());

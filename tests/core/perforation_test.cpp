@@ -8,6 +8,7 @@
 
 #include "fixture.h"
 #include "hash_probe.h"
+#include "results.h"
 
 namespace ravel {
 namespace {
@@ -357,6 +358,15 @@ TEST(Perforation, BrokenYarnLinesAreTheBrokenYarnsOverTheWholeFabric) {
   EXPECT_EQ(f.model, "full");
   EXPECT_EQ(f.broken_warp_lines, q.broken_warp_lines);
   EXPECT_EQ(f.broken_weft_lines, q.broken_weft_lines);
+}
+
+// How `ravel run` and the app write them: consecutive lines as one range.
+TEST(Perforation, BrokenLinesAreWrittenAsRanges) {
+  EXPECT_EQ(line_ranges({}), "");
+  EXPECT_EQ(line_ranges({0}), "0");
+  EXPECT_EQ(line_ranges({-1, 0, 1}), "-1..1");
+  EXPECT_EQ(line_ranges({-6, -5, -4, 0, 4, 5, 6}), "-6..-4, 0, 4..6");
+  EXPECT_EQ(line_ranges({-3, 3}), "-3, 3");
 }
 
 }  // namespace
