@@ -29,11 +29,12 @@ struct Shot {
   bool decided_passing = false;  // perforated by solver.decide_passing's early decision (FastRules)
   double wall_time_s = 0;
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
-  std::vector<int> broken_warp_lines, broken_weft_lines;  // their grid lines (Summary's)
-  std::string purpose;                                    // bracket | bisect | fit
-  bool failed = false;                                    // the run diverged: its outcome means nothing
-  std::string error;                                      // why
-  bool resumed = false;                                   // read back from a kept run, not run now
+  // Their grid lines (Summary's).
+  std::vector<int> broken_warp_lines, broken_weft_lines;
+  std::string purpose;   // bracket | bisect | fit
+  bool failed = false;   // the run diverged: its outcome means nothing
+  std::string error;     // why
+  bool resumed = false;  // read back from a kept run, not run now
   // The fast search (find_ballistic_limit_fast) stops a run the moment its outcome became
   // moot: it then has no outcome (decided = false, perforated = false, end_reason
   // "cancelled") and says why; it is listed, never used.
