@@ -360,6 +360,10 @@ nlohmann::ordered_json shot_to_json(const Shot& s) {
   q["broken_weft_yarns"] = s.broken_weft_yarns;
   q["broken_warp_lines"] = s.broken_warp_lines;
   q["broken_weft_lines"] = s.broken_weft_lines;
+  q["friction_work_J"] = s.friction_work_J;
+  q["friction_work_to_first_break_J"] = s.friction_work_to_first_break_J;
+  q["first_break_distance_mm"] = s.first_break_distance_mm >= 0 ? nlohmann::ordered_json(s.first_break_distance_mm)
+                                                                : nlohmann::ordered_json(nullptr);
   q["wall_time_s"] = s.wall_time_s;
   if (s.cancelled) {
     q["cancelled"] = true;
@@ -401,6 +405,9 @@ Shot shot_from_json(const nlohmann::json& q) {
   };
   s.broken_warp_lines = lines("broken_warp_lines");
   s.broken_weft_lines = lines("broken_weft_lines");
+  s.friction_work_J = num("friction_work_J", 0);
+  s.friction_work_to_first_break_J = num("friction_work_to_first_break_J", 0);
+  s.first_break_distance_mm = num("first_break_distance_mm", -1);
   s.wall_time_s = num("wall_time_s", 0);
   s.cancelled = q.value("cancelled", false);
   s.cancel_reason = q.value("cancel_reason", "");
@@ -566,6 +573,9 @@ RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>
     shot.broken_weft_yarns = s.broken_weft_yarns;
     shot.broken_warp_lines = s.broken_warp_lines;
     shot.broken_weft_lines = s.broken_weft_lines;
+    shot.friction_work_J = s.friction_work_J;
+    shot.friction_work_to_first_break_J = s.friction_work_to_first_break_J;
+    shot.first_break_distance_mm = s.first_break_time_s >= 0 ? s.first_break_distance_m * 1e3 : -1;
     if (!kept.empty()) {  // kept for a rerun after an interruption
       prepare_output_dir(cache_dir + "/runs");
       nlohmann::ordered_json j;

@@ -31,6 +31,9 @@ struct Shot {
   int broken_warp_yarns = 0, broken_weft_yarns = 0;
   // Their grid lines (Summary's).
   std::vector<int> broken_warp_lines, broken_weft_lines;
+  // Yarn-yarn friction work over the run and up to the first broken element, and where that
+  // element was (Summary's; -1: no break, or a run kept before these were).
+  double friction_work_J = 0, friction_work_to_first_break_J = 0, first_break_distance_mm = -1;
   std::string purpose;   // bracket | bisect | fit
   bool failed = false;   // the run diverged: its outcome means nothing
   std::string error;     // why

@@ -51,6 +51,14 @@ std::string broken_yarns_text(const Shot& s) {
   return t;
 }
 
+std::string limit_friction_text(const Shot& s) {
+  if (s.first_break_distance_mm < 0) return "";
+  return "; at the limit (its lowest perforating run, " + num(s.velocity_mps, "%.1f") +
+         " m/s): " + num(s.friction_work_to_first_break_J, "%.2f") + " J before the first break (" +
+         num(s.first_break_distance_mm, "%.1f") + " mm from the strike point), " + num(s.friction_work_J, "%.2f") +
+         " J in all";
+}
+
 EnergyPeak find_energy_peak(const Series& s, double min_fall, double window_mps) {
   EnergyPeak p;
   const int n = int(std::min(s.x.size(), s.y.size()));
@@ -226,6 +234,10 @@ void make_claims(PaperState& ps) {
       if (std::isfinite(b.t_us))
         c.ravel += "; " + num(b.friction_J, "%.2f") + " J of it before the first yarn broke (" + num(b.t_us, "%.1f") +
                    " us), the rest after";
+      // The same split at the ballistic limit (docs/MODEL.md §10, "At the ballistic limit").
+      if (const LimitEntry* e = bl_of(0.2))
+        for (const auto& s : e->result.runs)
+          if (s.perforated && same(s.velocity_mps, e->result.hi_mps)) c.ravel += limit_friction_text(s);
       c.verdict = r->friction_work_J >= 1.0 / 3 && r->friction_work_J <= 3 ? "agrees"
                   : r->friction_work_J < 0.1 * r->energy_J                 ? "partly"
                                                                            : "differs";

@@ -417,12 +417,22 @@ TEST(BallisticLimit, LimitJsonStatesMethodAndErrorEstimate) {
   const auto back4 = limit_from_json(j4.dump());
   EXPECT_EQ(back4.runs.front().broken_weft_lines, (std::vector<int>{-2, 0, 2}));
   EXPECT_EQ(back4.runs.front().broken_warp_lines, (std::vector<int>{0}));
+  // ... and so do the friction split and where the first break was.
+  withl.runs.front().friction_work_J = 18.5;
+  withl.runs.front().friction_work_to_first_break_J = 0.41;
+  withl.runs.front().first_break_distance_mm = 59.5;
+  const auto back6 = limit_from_json(limit_json(withl, o, "s", {}));
+  EXPECT_DOUBLE_EQ(back6.runs.front().friction_work_J, 18.5);
+  EXPECT_DOUBLE_EQ(back6.runs.front().friction_work_to_first_break_J, 0.41);
+  EXPECT_DOUBLE_EQ(back6.runs.front().first_break_distance_mm, 59.5);
   auto j5 = j4;
   j5["runs"][0].erase("broken_weft_lines");
+  j5["runs"][0].erase("first_break_distance_mm");
   j5["runs"][0]["broken_warp_lines"] = "x";
   const auto back5 = limit_from_json(j5.dump());
   EXPECT_TRUE(back5.runs.front().broken_weft_lines.empty());
   EXPECT_TRUE(back5.runs.front().broken_warp_lines.empty());
+  EXPECT_DOUBLE_EQ(back5.runs.front().first_break_distance_mm, -1);  // absent: not known
 }
 
 }  // namespace

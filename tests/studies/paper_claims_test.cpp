@@ -70,5 +70,20 @@ TEST(PaperClaims, BrokenYarnsThroughTheStrikePointAreNamed) {
   EXPECT_EQ(broken_yarns_text(s), "0 weft and 0 warp yarns broken");
 }
 
+// The friction claim's split at the limit: from the search's lowest perforating run.
+TEST(PaperClaims, FrictionAtTheLimitIsTheRunsOwnSplit) {
+  Shot s;
+  s.velocity_mps = 79.5;
+  s.perforated = true;
+  s.friction_work_J = 19.56;
+  s.friction_work_to_first_break_J = 0.42;
+  s.first_break_distance_mm = 59.5;
+  EXPECT_EQ(limit_friction_text(s),
+            "; at the limit (its lowest perforating run, 79.5 m/s): 0.42 J before the first break (59.5 mm from the "
+            "strike point), 19.56 J in all");
+  s.first_break_distance_mm = -1;  // no break, or a run kept before the split was
+  EXPECT_EQ(limit_friction_text(s), "");
+}
+
 }  // namespace
 }  // namespace ravel::studies::paper_detail
