@@ -91,8 +91,8 @@ struct FastRules {
   bool probe_gaps = true;
   // Runs end as perforated once the projectile is passing through (the scene key
   // solver.decide_passing, docs/MODEL.md §8): after some element broke, held only by yarns
-  // with no intact path to a clamp, and at its present drag it would travel further than the fabric's largest half-size
-  // before stopping. Near the limit a perforating run otherwise drags the free yarns through
+  // with no intact path to a clamp, and at its present drag it would travel further than the
+  // fabric's largest half-size before stopping. Near the limit a perforating run otherwise drags the free yarns through
   // the weave for another millisecond at an almost constant speed.
   bool decide_passing = true;
 };

@@ -92,6 +92,12 @@ void make_claims(PaperState& ps) {
       if (!std::isnan(e.mu) && same(e.mu, mu) && e.have && e.result.bracketed) return &e;
     return nullptr;
   };
+  // A search's lowest perforating run: the upper end of its bracket (nullptr if not in its runs).
+  auto lowest_perforation = [](const LimitEntry& e) -> const Shot* {
+    for (const auto& s : e.result.runs)
+      if (s.perforated && same(s.velocity_mps, e.result.hi_mps)) return &s;
+    return nullptr;
+  };
   const LimitEntry* pin_entry = nullptr;
   for (const auto& e : limits)
     if (std::isnan(e.mu) && e.have && e.result.bracketed) pin_entry = &e;
@@ -236,8 +242,7 @@ void make_claims(PaperState& ps) {
                    " us), the rest after";
       // The same split at the ballistic limit (docs/MODEL.md §10, "At the ballistic limit").
       if (const LimitEntry* e = bl_of(0.2))
-        for (const auto& s : e->result.runs)
-          if (s.perforated && same(s.velocity_mps, e->result.hi_mps)) c.ravel += limit_friction_text(s);
+        if (const Shot* s = lowest_perforation(*e)) c.ravel += limit_friction_text(*s);
       c.verdict = r->friction_work_J >= 1.0 / 3 && r->friction_work_J <= 3 ? "agrees"
                   : r->friction_work_J < 0.1 * r->energy_J                 ? "partly"
                                                                            : "differs";
@@ -321,13 +326,11 @@ void make_claims(PaperState& ps) {
     }
     claims.push_back(b);
     Claim c{"17", "At mu = 0.02 no yarn breaks at the BL (the free edges ravel).", "", "not measured"};
-    if (const LimitEntry* e = bl_of(0.02)) {
-      for (const auto& s : e->result.runs)
-        if (s.perforated && same(s.velocity_mps, e->result.hi_mps)) {
-          c.ravel = "lowest perforating run (" + num(s.velocity_mps, "%.1f") + " m/s): " + broken_yarns_text(s);
-          c.verdict = s.broken_weft_yarns + s.broken_warp_yarns == 0 ? "agrees" : "differs";
-        }
-    }
+    if (const LimitEntry* e = bl_of(0.02))
+      if (const Shot* s = lowest_perforation(*e)) {
+        c.ravel = "lowest perforating run (" + num(s->velocity_mps, "%.1f") + " m/s): " + broken_yarns_text(*s);
+        c.verdict = s->broken_weft_yarns + s->broken_warp_yarns == 0 ? "agrees" : "differs";
+      }
     claims.push_back(c);
   }
   for (const auto& c : claims) {

@@ -115,8 +115,8 @@ EnergyPeak find_energy_peak(const Series& s, double min_fall = 0.15, double wind
 // point (grid line 0, known from the run's broken_*_lines), that a symmetric model holds those.
 std::string broken_yarns_text(const Shot& s);
 
-// "; at the limit (the lowest perforating run of the search, 79.5 m/s): 0.42 J before the
-// first break (59.5 mm out), 19.56 J in all" for the friction claim; "" without a break.
+// "; at the limit (its lowest perforating run, 79.5 m/s): 0.42 J before the first break
+// (59.5 mm from the strike point), 19.56 J in all" for the friction claim; "" without a break.
 std::string limit_friction_text(const Shot& s);
 
 struct Claim {
