@@ -599,6 +599,7 @@ void YarnContact<Real>::run() {
       for (int b = b0; b < b1; ++b) {
         const int c0 = b * kBatch, c1 = std::min(nc, (b + 1) * kBatch);
         crossing_batch(c0, c1, alpha, first, last, &ctx_.impulses[c0]);
+        if (team == 1) continue;  // one thread gathers every record: no node bounds needed
         for (int c = c0; c < c1; ++c) {
           // The lowest and highest node the record can touch.
           const CrossingImpulse& r = ctx_.impulses[c];
@@ -621,25 +622,26 @@ void YarnContact<Real>::run() {
       // Each thread runs them over its own crossings, then takes in the other threads'
       // ends (two serial sweeps over all crossings here took about 2 % of the main thread's
       // time in a two-thread step, the other thread waiting).
-      int* rl = ctx_.rec_last.data();
-      int* rf = ctx_.rec_first.data();
-      for (int c = cb0 + 1; c < cb1; ++c) rl[c] = std::max(rl[c], rl[c - 1]);
-      for (int c = cb1 - 2; c >= cb0; --c) rf[c] = std::min(rf[c], rf[c + 1]);
-      ctx_.chunk_last[t] = cb1 > cb0 ? rl[cb1 - 1] : -1;
-      ctx_.chunk_first[t] = cb1 > cb0 ? rf[cb0] : std::numeric_limits<int>::max();
-#pragma omp barrier
-      int before = -1, after = std::numeric_limits<int>::max();
-      for (int u = 0; u < t; ++u) before = std::max(before, ctx_.chunk_last[u]);
-      for (int u = t + 1; u < team; ++u) after = std::min(after, ctx_.chunk_first[u]);
-      // (the running bounds are monotone, so only a leading / trailing run of them changes)
-      for (int c = cb0; c < cb1 && rl[c] < before; ++c) rl[c] = before;
-      for (int c = cb1 - 1; c >= cb0 && rf[c] > after; --c) rf[c] = after;
-#pragma omp barrier
-      int lo, hi;
+      int lo, hi, c_first = 0, c_end = nc;
       my_share(model_.node_count, lo, hi, t);
-      const int c_first = int(std::lower_bound(ctx_.rec_last.begin(), ctx_.rec_last.end(), lo) - ctx_.rec_last.begin());
-      const int c_end =
-          int(std::lower_bound(ctx_.rec_first.begin(), ctx_.rec_first.end(), hi) - ctx_.rec_first.begin());
+      if (team > 1) {
+        int* rl = ctx_.rec_last.data();
+        int* rf = ctx_.rec_first.data();
+        for (int c = cb0 + 1; c < cb1; ++c) rl[c] = std::max(rl[c], rl[c - 1]);
+        for (int c = cb1 - 2; c >= cb0; --c) rf[c] = std::min(rf[c], rf[c + 1]);
+        ctx_.chunk_last[t] = cb1 > cb0 ? rl[cb1 - 1] : -1;
+        ctx_.chunk_first[t] = cb1 > cb0 ? rf[cb0] : std::numeric_limits<int>::max();
+#pragma omp barrier
+        int before = -1, after = std::numeric_limits<int>::max();
+        for (int u = 0; u < t; ++u) before = std::max(before, ctx_.chunk_last[u]);
+        for (int u = t + 1; u < team; ++u) after = std::min(after, ctx_.chunk_first[u]);
+        // (the running bounds are monotone, so only a leading / trailing run of them changes)
+        for (int c = cb0; c < cb1 && rl[c] < before; ++c) rl[c] = before;
+        for (int c = cb1 - 1; c >= cb0 && rf[c] > after; --c) rf[c] = after;
+#pragma omp barrier
+        c_first = int(std::lower_bound(ctx_.rec_last.begin(), ctx_.rec_last.end(), lo) - ctx_.rec_last.begin());
+        c_end = int(std::lower_bound(ctx_.rec_first.begin(), ctx_.rec_first.end(), hi) - ctx_.rec_first.begin());
+      }
       for (int c = c_first; c < c_end; ++c) gather(ctx_.impulses[c], lo, hi);
       finish_pass(lo, hi);
       if (last) {
@@ -706,8 +708,10 @@ template <class Real>
 RAVEL_INLINE void YarnContact<Real>::moved_since_last(int c, ContactTally& tally) {
   CrossingState<Real>& x = s_.cr[c];
   const LastPair was = x.last;
-  const Real moved = (pair_offset(model_, s_, c, was.kw, was.kf) - was.offset).norm();
-  x.last = {x.kw, x.kf, pair_offset(model_, s_, c, x.kw, x.kf)};
+  const V3 now = pair_offset(model_, s_, c, was.kw, was.kf);
+  const Real moved = (now - was.offset).norm();
+  // (the same pair as last step, the common case: the same offset)
+  x.last = {x.kw, x.kf, x.kw == was.kw && x.kf == was.kf ? now : pair_offset(model_, s_, c, x.kw, x.kf)};
   ctx_.moved[c] = moved;
   if (x.event) tally.events = true;
   if (!x.active) return;
