@@ -778,6 +778,8 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
   if (j.is_discarded() || !j.is_object() || !j.contains("rows") || !j["rows"].is_array()) return out;
   if (j.value("scene", std::string()) != scene.name) return out;
   const std::string date = j.value("date", std::string("?"));
+  // The measurement's own note (ravel tradeoff --note): what it does not cover, said with each line.
+  const std::string note = j.contains("note") && j["note"].is_string() ? j["note"].get<std::string>() : "";
   const double v0 = j.contains("impact_velocity_mps") && j["impact_velocity_mps"].is_number()
                         ? j["impact_velocity_mps"].get<double>()
                         : NAN;
@@ -826,7 +828,8 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
     out.push_back(knob + "=" + best->value("value", std::string()) + " gives " + words + " within " +
                   fmt("%g", 100 * tolerance) + " % of the reference at " + fmt("%.1f", my_cost / cost_of(*best)) +
                   "x less cost than " + knob + "=" + mine + " (measured by ravel tradeoff on " + date +
-                  (std::isfinite(v0) ? ", " + fmt("%.0f", v0) + " m/s" : std::string()) + ")");
+                  (std::isfinite(v0) ? ", " + fmt("%.0f", v0) + " m/s" : std::string()) +
+                  (note.empty() ? std::string() : "; " + note) + ")");
   }
   return out;
 }

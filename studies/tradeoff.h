@@ -93,7 +93,7 @@ struct TradeoffOptions {
   std::vector<std::string> search_rules;
   bool searches_only = false;                                // no knob rows (only the reference run and the searches)
   std::string date;                                          // YYYY-MM-DD written into tradeoff.json ("" = today)
-  std::string note;                                          // free text (machine load, quick mode) for tradeoff.json
+  std::string note;  // free text for tradeoff.json (machine load, quick mode, what it does not cover); suggestions drawn from the file repeat it
   std::function<void(const std::string& what)> on_progress;  // one line per finished run
 };
 

@@ -152,11 +152,12 @@ TEST(Stability, ClassifiesWarnings) {
 }
 
 // A synthetic tradeoff.json for scene "tiny".
-std::string synthetic_json(double k2_error) {
+std::string synthetic_json(double k2_error, const std::string& note = "") {
   nlohmann::ordered_json j;
   j["scene"] = "tiny";
   j["date"] = "2026-01-02";
   j["impact_velocity_mps"] = 260;
+  j["note"] = note;
   auto row = [](const char* knob, const char* value, double cost, double e_vr, double e_ea) {
     return nlohmann::ordered_json{{"knob", knob},
                                   {"value", value},
@@ -198,6 +199,19 @@ TEST(Suggestions, PicksTheCheapestQualifyingSetting) {
       << only3[0];
   // At 5 %, dt_factor 0.9 qualifies too.
   EXPECT_EQ(tradeoff_suggestions(s, synthetic_json(0.004), 0.05).size(), 2u);
+  // No note: the line ends with the measurement's date and velocity.
+  EXPECT_NE(out[0].find("2026-01-02, 260 m/s)"), std::string::npos) << out[0];
+}
+
+// The measurement's note (what it does not cover) goes with every line it gives.
+TEST(Suggestions, CarryTheMeasurementsNote) {
+  const Scene s = tiny_named_scene();
+  const auto out = tradeoff_suggestions(s, synthetic_json(0.004, "not for ballistic-limit searches"), 0.05);
+  ASSERT_EQ(out.size(), 2u);
+  for (const auto& line : out)
+    EXPECT_NE(line.find("(measured by ravel tradeoff on 2026-01-02, 260 m/s; not for ballistic-limit searches)"),
+              std::string::npos)
+        << line;
 }
 
 TEST(Suggestions, SaysNothingWhenNothingQualifies) {
