@@ -101,6 +101,18 @@ int cmd_sweep(const Args& args) {
         throw UsageError("--vary " + vary.back().key + ": key varied twice");
       keys.push_back(vary.back().key);
     }
+    // The charts' x axis: the first --vary key unless --chart-x names another (cases keep their names).
+    std::vector<std::string> chart_keys = keys;
+    if (a.flags.count("chart-x")) {
+      const std::string x = a.flags["chart-x"];
+      const auto it = std::find(chart_keys.begin(), chart_keys.end(), x);
+      if (it == chart_keys.end()) {
+        std::string varied;
+        for (const auto& k : keys) varied += (varied.empty() ? "" : ", ") + k;
+        throw UsageError("--chart-x " + x + ": not a --vary key of this sweep (it varies " + varied + ")");
+      }
+      std::rotate(chart_keys.begin(), it, it + 1);
+    }
     const auto all = studies::expand_cases(vary);
     const auto mine = studies::shard_cases(all, opt.shard);
     const bool verbose = progress_wanted(a);
@@ -149,7 +161,7 @@ int cmd_sweep(const Args& args) {
     std::printf("  %s/results.csv\n", opt.out_dir.c_str());
     // Charts of what is finished so far (all shards), with their CSVs.
     const auto charts =
-        studies::sweep_charts(studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), keys);
+        studies::sweep_charts(studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), chart_keys);
     if (!charts.empty()) prepare_output_dir(opt.out_dir + "/charts");
     for (const auto& [stem, chart] : charts) {
       if (studies::finite_point_count(chart) == 0) continue;

@@ -92,6 +92,8 @@ std::vector<Command> make_table() {
         kJobs,
         {"vary", "KEY=START:STOP:STEP|V1,V2,...", true, "a key and its values (repeatable: the cases are the product)"},
         {"shard", "i/n", false, "only the cases k with k mod n = i - 1 (to split a sweep over machines)"},
+        {"chart-x", "KEY", false,
+         "the --vary key the charts put on the x axis (default: the first; the others make the series)"},
         {"no-extend", nullptr, false,
          "a run that reaches its end time undecided is not extended to solver.max_end_time_us"},
         {"restart", nullptr, false, "start over in a folder that holds another sweep's cases (they are removed)"},

@@ -30,6 +30,8 @@ expect_refused bad_value "--vary yarn.friction: value 'x'" sweep --vary yarn.fri
 expect_refused bad_shard "--shard: expected i/n" sweep --vary yarn.friction=0.1 --shard 4/3
 expect_refused bad_jobs "--jobs: expected a whole number" sweep --vary yarn.friction=0.1 --jobs 0
 expect_refused no_vary "sweep needs at least one --vary" sweep
+expect_refused bad_chart_x "--chart-x yarn.friction: not a --vary key of this sweep (it varies projectile.velocity_mps)" \
+  sweep --vary projectile.velocity_mps=80,120 --chart-x yarn.friction
 expect_refused bad_set "scene error" sweep --vary yarn.friction=0.1 --set projectile.mass_g=-1
 expect_refused bad_tol "--tolerance: expected a positive number" limit --tolerance -1
 expect_refused limit_bad_set "projectile.velocity" limit --set projectile.velocity=3
@@ -54,6 +56,19 @@ head -1 "$WORK/sweep/results.csv" | grep -q '^case,projectile.velocity_mps,yarn.
 "$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
   --out "$WORK/sweep" >"$WORK/rerun.out" 2>&1
 grep -q "0 run, 6 already finished" "$WORK/rerun.out" || fail "rerun: $(cat "$WORK/rerun.out")"
+# The charts put the first --vary key on x (one series per friction) ...
+head -1 "$WORK/sweep/charts/residual_velocity_mps_vs_projectile.velocity_mps.csv" |
+  grep -q '^series,projectile.velocity_mps' || fail "charts: x is not the first --vary key"
+grep -c '^yarn.friction = ' "$WORK/sweep/charts/residual_velocity_mps_vs_projectile.velocity_mps.csv" |
+  grep -qx 6 || fail "charts: not 2 friction series of 3 points"
+# ... and a rerun with --chart-x redraws them over the other key (nothing is run again): one
+# series per velocity, two points each.
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
+  --chart-x yarn.friction --out "$WORK/sweep" >"$WORK/chartx.out" 2>&1
+grep -q "0 run, 6 already finished" "$WORK/chartx.out" || fail "chart-x rerun: $(cat "$WORK/chartx.out")"
+cx="$WORK/sweep/charts/residual_velocity_mps_vs_yarn.friction.csv"
+[[ -s $cx && -s ${cx%.csv}.png && -s ${cx%.csv}.svg ]] || fail "chart-x: no chart over yarn.friction: $(ls "$WORK/sweep/charts")"
+grep -c '^projectile.velocity_mps = ' "$cx" | grep -qx 6 || fail "chart-x: not 3 velocity series of 2 points: $(cat "$cx")"
 
 # limit on the cheap scene: limit.json with the bracket, the fit and every run. First the
 # reference search (its progress lines count the runs still to make) ...
