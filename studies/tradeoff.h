@@ -91,9 +91,11 @@ struct TradeoffOptions {
   // (fast_rule_table names). `searches` false: none.
   bool searches = false;
   std::vector<std::string> search_rules;
-  bool searches_only = false;                                // no knob rows (only the reference run and the searches)
-  std::string date;                                          // YYYY-MM-DD written into tradeoff.json ("" = today)
-  std::string note;  // free text for tradeoff.json (machine load, quick mode, what it does not cover); suggestions drawn from the file repeat it
+  bool searches_only = false;  // no knob rows (only the reference run and the searches)
+  std::string date;            // YYYY-MM-DD written into tradeoff.json ("" = today)
+  // Free text for tradeoff.json (machine load, quick mode, what it does not cover); the
+  // suggestions drawn from the file repeat it.
+  std::string note;
   std::function<void(const std::string& what)> on_progress;  // one line per finished run
 };
 
