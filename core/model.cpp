@@ -89,7 +89,77 @@ Model build_model(const Scene& scene) {
   g.i_max = g.hx;
   g.j_min = can_y ? 0 : -g.hy;
   g.j_max = g.hy;
-  const int ni = g.i_max - g.i_min + 1, nj = g.j_max - g.j_min + 1;
+  // Modelled yarns: their real yarn indices (positions I L0, J L0) and weights w (real
+  // yarns each stands for: its spacing to its neighbours, in L0). Without grading every
+  // index from i_min to i_max, w = 1 (k when uniformly lumped, already in L0).
+  const int kf = single || k > 1 ? 1 : f.far_yarns_per_element;
+  const bool graded = kf > 1;
+  auto modelled = [&](int lo, int hi, double centre_m, bool clamp_lo, bool clamp_hi) {
+    std::vector<int> idx;
+    if (!graded) {
+      for (int I = lo; I <= hi; ++I) idx.push_back(I);
+      return idx;
+    }
+    // Every real yarn within the band; outside it every kf-th, counted from the edge
+    // inwards (so the clamped or free edge yarn is modelled and mirrored halves match).
+    const double band = f.full_resolution_m + 1e-9 * L0;
+    const double clamp_band = f.clamp_resolution_m;
+    auto fine = [&](int I) {
+      return std::abs(I * L0 - centre_m) <= band || (clamp_lo && (I - lo) * L0 <= clamp_band + 1e-9 * L0) ||
+             (clamp_hi && (hi - I) * L0 <= clamp_band + 1e-9 * L0);
+    };
+    std::vector<char> keep(size_t(hi - lo + 1), 0);
+    for (int I = lo; I <= hi; ++I) keep[size_t(I - lo)] = fine(I);
+    if (lo == 0) keep[0] = 1;  // the mirror plane's yarn
+    // Each run [a, b] of coarse yarns: an edge run every kf-th from the edge; a run between
+    // two modelled yarns a - 1 and b + 1 in equal gaps of at most kf.
+    for (int a = lo; a <= hi;) {
+      if (keep[size_t(a - lo)]) {
+        ++a;
+        continue;
+      }
+      int b = a;
+      while (b + 1 <= hi && !keep[size_t(b + 1 - lo)]) ++b;
+      if (b == hi)
+        for (int I = hi; I >= a; I -= kf) keep[size_t(I - lo)] = 1;
+      else if (a == lo)
+        for (int I = lo; I <= b; I += kf) keep[size_t(I - lo)] = 1;
+      else {
+        const int span = b - a + 2, gaps = (span + kf - 1) / kf;
+        for (int t = 1; t < gaps; ++t) keep[size_t(a - 1 + (t * span + gaps / 2) / gaps - lo)] = 1;
+      }
+      a = b + 1;
+    }
+    for (int I = lo; I <= hi; ++I)
+      if (keep[size_t(I - lo)]) idx.push_back(I);
+    return idx;
+  };
+  const std::vector<int> gi =
+      single ? std::vector<int>{0}
+             : modelled(g.i_min, g.i_max, p.offset_x_m, m.clamped.left && g.i_min < 0, m.clamped.right);
+  const std::vector<int> gj = modelled(g.j_min, g.j_max, p.offset_y_m, m.clamped.bottom && g.j_min < 0, m.clamped.top);
+  auto weights = [&](const std::vector<int>& idx, bool mirrored) {
+    std::vector<double> w(idx.size(), 1.0);
+    if (!graded) return w;
+    for (size_t a = 0; a < idx.size(); ++a) {
+      const double left = a > 0 ? idx[a] - idx[a - 1] : (mirrored && idx[a] == 0 ? 1.0 : -1.0);
+      const double right = a + 1 < idx.size() ? idx[a + 1] - idx[a] : -1.0;
+      // (an edge yarn: itself and half the gap inside it, so the weights add up to the real count)
+      w[a] = left > 0 && right > 0 ? 0.5 * (left + right) : 0.5 * (1.0 + std::max(left, right));
+    }
+    return w;
+  };
+  const std::vector<double> wi_of = weights(gi, can_x), wj_of = weights(gj, can_y);
+  // Zig-zag parity by modelled index (every yarn alternates over and under), anchored at
+  // the modelled yarn nearest the strike point so the centre crossing keeps the warp on top.
+  auto anchor = [](const std::vector<int>& idx) {
+    size_t best = 0;
+    for (size_t a = 0; a < idx.size(); ++a)
+      if (std::abs(idx[a]) < std::abs(idx[best])) best = a;
+    return int(best) - idx[best];
+  };
+  const int pi0 = graded ? anchor(gi) : 0, pj0 = graded ? anchor(gj) : 0;
+  const int ni = int(gi.size()), nj = int(gj.size());
 
   // ---- material
   m.material = y.material;
@@ -148,48 +218,57 @@ Model build_model(const Scene& scene) {
     // (I, J), with J running fastest, the order the contact pass visits crossings in. A
     // crossing's six window nodes then lie in three sequential streams (grid rows I - 1, I,
     // I + 1) instead of one weft node per crossing a whole row apart (see docs/MODEL.md §1).
+    // Graded: a node stands for w_I x w_J real crossings' yarn, and each yarn's crimp
+    // amplitude follows its own spacing (the warp's the wefts' w_J), so the crimp angle is
+    // the real fabric's on both yarns (docs/MODEL.md §1).
     std::vector<int> wid(size_t(ni) * nj), fid(size_t(ni) * nj);
-    for (int I = g.i_min; I <= g.i_max; ++I)
-      for (int J = g.j_min; J <= g.j_max; ++J) {
-        const bool warp_top = ((I + J) % 2 + 2) % 2 == 0;  // warp yarn I runs along y
-        const size_t at = size_t(I - g.i_min) * nj + (J - g.j_min);
-        wid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? 0.5 * L1 : -0.5 * L1), node_mass * plane_factor(I, J),
-                           fixed_bits(I, J));
-        fid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? -0.5 * L1 : 0.5 * L1), node_mass * plane_factor(I, J),
-                           fixed_bits(I, J));
+    for (int a = 0; a < ni; ++a)
+      for (int b = 0; b < nj; ++b) {
+        const int I = gi[size_t(a)], J = gj[size_t(b)];
+        const bool warp_top =
+            graded ? ((a + pi0 + b + pj0) % 2 + 2) % 2 == 0 : ((I + J) % 2 + 2) % 2 == 0;  // warp yarn I runs along y
+        const size_t at = size_t(a) * nj + b;
+        const double wa = wi_of[size_t(a)], wb = wj_of[size_t(b)];
+        const double mass = node_mass * wa * wb * plane_factor(I, J);
+        const double zw = 0.5 * L1 * wb, zf = 0.5 * L1 * wa;
+        wid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? zw : -zw), mass, fixed_bits(I, J));
+        fid[at] = add_node(Vec3d(I * L0, J * L0, warp_top ? -zf : zf), mass, fixed_bits(I, J));
       }
-    for (int I = g.i_min; I <= g.i_max; ++I) {
-      for (int J = g.j_min; J <= g.j_max; ++J) m.yarn_nodes.push_back(wid[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+    for (int a = 0; a < ni; ++a) {
+      for (int b = 0; b < nj; ++b) m.yarn_nodes.push_back(wid[size_t(a) * nj + b]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(warp);
-      m.yarn_grid.push_back(I);
+      m.yarn_grid.push_back(gi[size_t(a)]);
     }
-    for (int J = g.j_min; J <= g.j_max; ++J) {
-      for (int I = g.i_min; I <= g.i_max; ++I) m.yarn_nodes.push_back(fid[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+    for (int b = 0; b < nj; ++b) {
+      for (int a = 0; a < ni; ++a) m.yarn_nodes.push_back(fid[size_t(a) * nj + b]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(weft);
-      m.yarn_grid.push_back(J);
+      m.yarn_grid.push_back(gj[size_t(b)]);
     }
   } else {
     // Pin-jointed: one node per crossing carrying both yarns' mass.
     m.warp_count = ni;
     m.weft_count = nj;
     std::vector<int> id(size_t(ni) * nj);
-    for (int I = g.i_min; I <= g.i_max; ++I)
-      for (int J = g.j_min; J <= g.j_max; ++J)
-        id[size_t(I - g.i_min) * nj + (J - g.j_min)] =
-            add_node(Vec3d(I * L0, J * L0, 0), 2 * node_mass * plane_factor(I, J), fixed_bits(I, J));
-    for (int I = g.i_min; I <= g.i_max; ++I) {
-      for (int J = g.j_min; J <= g.j_max; ++J) m.yarn_nodes.push_back(id[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+    for (int a = 0; a < ni; ++a)
+      for (int b = 0; b < nj; ++b) {
+        const int I = gi[size_t(a)], J = gj[size_t(b)];
+        id[size_t(a) * nj + b] =
+            add_node(Vec3d(I * L0, J * L0, 0), 2 * node_mass * wi_of[size_t(a)] * wj_of[size_t(b)] * plane_factor(I, J),
+                     fixed_bits(I, J));
+      }
+    for (int a = 0; a < ni; ++a) {
+      for (int b = 0; b < nj; ++b) m.yarn_nodes.push_back(id[size_t(a) * nj + b]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(warp);
-      m.yarn_grid.push_back(I);
+      m.yarn_grid.push_back(gi[size_t(a)]);
     }
-    for (int J = g.j_min; J <= g.j_max; ++J) {
-      for (int I = g.i_min; I <= g.i_max; ++I) m.yarn_nodes.push_back(id[size_t(I - g.i_min) * nj + (J - g.j_min)]);
+    for (int b = 0; b < nj; ++b) {
+      for (int a = 0; a < ni; ++a) m.yarn_nodes.push_back(id[size_t(a) * nj + b]);
       m.yarn_offset.push_back(int(m.yarn_nodes.size()));
       m.yarn_family.push_back(weft);
-      m.yarn_grid.push_back(J);
+      m.yarn_grid.push_back(gj[size_t(b)]);
     }
   }
   m.node_count = int(m.x0.size());
@@ -214,20 +293,28 @@ Model build_model(const Scene& scene) {
     const bool is_warp = m.yarn_family[yy] == warp;
     const int grid = m.yarn_grid[yy];
     const bool on_plane = is_warp ? (can_x && grid == 0) : (can_y && grid == 0);
-    const double a = area * (on_plane ? 0.5 : 1.0);
+    const double yarn_w = !graded ? 1.0 : is_warp ? wi_of[size_t(yy)] : wj_of[size_t(yy - m.warp_count)];
+    const double a = area * yarn_w * (on_plane ? 0.5 : 1.0);
     const int n = m.yarn_size(yy);
+    // Graded: each element's rest length is its own (the zig-zag's, or the node spacing of
+    // the pin-jointed net); the crimped length sets its bending stiffness.
+    auto graded_rest = [&](int kk) {
+      const Vec3d d = m.x0[m.yarn_node(yy, kk + 1)] - m.x0[m.yarn_node(yy, kk)];
+      return sliding ? d.norm() : std::hypot(d.x(), d.y());
+    };
     for (int kk = 0; kk + 1 < n; ++kk) {
       m.elem_a.push_back(m.yarn_node(yy, kk));
       m.elem_b.push_back(m.yarn_node(yy, kk + 1));
       m.elem_yarn.push_back(yy);
-      m.elem_rest.push_back(rest_len);
+      m.elem_rest.push_back(graded ? graded_rest(kk) : rest_len);
       m.elem_area.push_back(a);
     }
     const int e0 = m.yarn_elem_offset.back();
     for (int kk = 0; kk + 2 < n; ++kk) {
       m.bend_e1.push_back(e0 + kk);
       m.bend_e2.push_back(e0 + kk + 1);
-      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / crimped);
+      const double bend_len = graded ? m.elem_rest[size_t(e0 + kk)] * (sliding ? 1.0 : 1.0 + m.crimp_strain) : crimped;
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len);
       // Midpoint distance at rest: along the yarn the zig-zag midpoints sit L0 apart.
       const Vec3d m1 = 0.5 * (m.x0[m.yarn_node(yy, kk)] + m.x0[m.yarn_node(yy, kk + 1)]);
       const Vec3d m2 = 0.5 * (m.x0[m.yarn_node(yy, kk + 1)] + m.x0[m.yarn_node(yy, kk + 2)]);
@@ -242,7 +329,8 @@ Model build_model(const Scene& scene) {
       const Vec3d mid = 0.5 * (m.x0[m.yarn_node(yy, 0)] + m.x0[m.yarn_node(yy, 1)]);
       m.bend_e1.push_back(e0);
       m.bend_e2.push_back(e0);
-      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / crimped);
+      const double bend_len = graded ? m.elem_rest[size_t(e0)] * (sliding ? 1.0 : 1.0 + m.crimp_strain) : crimped;
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len);
       m.bend_rest.push_back(2 * std::abs(mid[ax]));
       m.bend_mirror.push_back(ax);
     }
@@ -264,8 +352,9 @@ Model build_model(const Scene& scene) {
         Crossing c;
         c.warp_yarn = wi;
         c.weft_yarn = m.warp_count + fj;
-        c.grid_i = g.i_min + wi;
-        c.grid_j = g.j_min + fj;
+        c.grid_i = gi[size_t(wi)];
+        c.grid_j = gj[size_t(fj)];
+        const double wa = wi_of[size_t(wi)], wb = wj_of[size_t(fj)], wab = 0.5 * (wa + wb);
         c.warp_node = fj;  // warp yarn wi has a node at every J
         c.weft_node = wi;
         // Inside a clamp both yarns are held: no contact to resolve there. (Keeping such
@@ -274,7 +363,8 @@ Model build_model(const Scene& scene) {
         if (m.fixed[m.yarn_node(c.warp_yarn, c.warp_node)] == fix_all ||
             m.fixed[m.yarn_node(c.weft_yarn, c.weft_node)] == fix_all)
           continue;
-        const bool warp_top = ((c.grid_i + c.grid_j) % 2 + 2) % 2 == 0;
+        const bool warp_top =
+            graded ? ((wi + pi0 + fj + pj0) % 2 + 2) % 2 == 0 : ((c.grid_i + c.grid_j) % 2 + 2) % 2 == 0;
         // t_warp x t_weft ~ y x x = -z; n must point from warp to weft: -z when the warp is on top.
         c.side = warp_top ? 1.0 : -1.0;
         // Rest distance between the two yarns' adjoining segments: the zig-zag brings them a
@@ -292,12 +382,16 @@ Model build_model(const Scene& scene) {
             best = std::min(best, (pb - pa).norm());
           }
         }
-        c.contact_distance = std::min(D, best);
+        // Graded: the two yarns' thicknesses scale with the real yarns each stands for (their
+        // mean sets D and c_min), and the crossing stands for w_I x w_J real ones.
+        c.contact_distance = std::min(D * wab, best);
         if (m.compression == CrossingCompression::hyperbolic) {
-          c.flattened_distance = std::min(f.flattened_gap_m * k, c.contact_distance);
-          c.compression_force = f.compression_force_n * double(k) * double(k) * plane_factor(c.grid_i, c.grid_j);
-          c.packed_distance = std::clamp(f.packed_gap_m * k, c.flattened_distance, c.contact_distance);
-          c.flattening_force = f.flattening_force_n * double(k) * double(k) * plane_factor(c.grid_i, c.grid_j);
+          c.flattened_distance = std::min(f.flattened_gap_m * k * wab, c.contact_distance);
+          c.compression_force =
+              f.compression_force_n * double(k) * double(k) * wa * wb * plane_factor(c.grid_i, c.grid_j);
+          c.packed_distance = std::clamp(f.packed_gap_m * k * wab, c.flattened_distance, c.contact_distance);
+          c.flattening_force =
+              f.flattening_force_n * double(k) * double(k) * wa * wb * plane_factor(c.grid_i, c.grid_j);
         } else {
           c.flattened_distance = c.contact_distance;
           c.packed_distance = c.contact_distance;
@@ -341,8 +435,11 @@ Model build_model(const Scene& scene) {
   m.projectile_mass = p.mass_kg / m.symmetry_factor;
   m.impact_velocity = p.velocity_mps;
   m.projectile_friction = p.friction;
+  // (A graded mesh's coarse yarns crimp higher: only the fabric under the projectile counts.)
   double z_top = -1e300;
-  for (const auto& x : m.x0) z_top = std::max(z_top, x.z());
+  const double reach = m.shape.bounding_radius() + 2 * f.spacing_m;
+  for (const auto& x : m.x0)
+    if (!graded || std::hypot(x.x() - p.offset_x_m, x.y() - p.offset_y_m) <= reach) z_top = std::max(z_top, x.z());
   // Place the projectile just touching the fabric top: find the centre offset along
   // -flight_dir at which the sdf of the strike point equals zero.
   const Vec3d strike(p.offset_x_m, p.offset_y_m, z_top);

@@ -216,6 +216,11 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["contact_model"] = s.contact_model;
   j["precision"] = scene.solver.precision == Precision::double_precision ? "double" : "float";
   j["yarns_per_element"] = scene.fabric.yarns_per_element;
+  if (scene.fabric.far_yarns_per_element > 1) {
+    j["far_yarns_per_element"] = scene.fabric.far_yarns_per_element;
+    j["full_resolution_mm"] = scene.fabric.full_resolution_m * 1e3;
+    j["clamp_resolution_mm"] = scene.fabric.clamp_resolution_m * 1e3;
+  }
   j["node_count"] = s.node_count;
   j["element_count"] = s.element_count;
   j["crossing_count"] = s.crossing_count;

@@ -232,6 +232,17 @@ std::vector<KeyDef> make_defs() {
       fabric.flattening_force_n);
   INT("fabric.yarns_per_element", "", "k: real yarns lumped into one modelled yarn (mesh coarsening; 1 = every yarn)",
       1, 16, fabric.yarns_per_element);
+  INT("fabric.far_yarns_per_element", "",
+      "graded mesh: real yarns per modelled yarn outside the band fabric.full_resolution_mm around the strike point "
+      "(1 = every yarn everywhere)",
+      1, 16, fabric.far_yarns_per_element);
+  NUM("fabric.full_resolution_mm", "mm",
+      "graded mesh: half-width of the bands through the strike point in which every real yarn is modelled", 1e-3, 0,
+      false, inf, fabric.full_resolution_m);
+  NUM("fabric.clamp_resolution_mm", "mm",
+      "graded mesh: width of the bands along clamped edges in which every real yarn is modelled (the clamped yarns "
+      "break there near the ballistic limit)",
+      1e-3, 0, false, inf, fabric.clamp_resolution_m);
   text_key(
       defs, "yarn.material", "zener (viscoelastic, Eq 23) or elastic (linear, modulus_pa)", {"zener", "elastic"},
       [](Scene& s, const std::string& v) { s.yarn.material = v == "zener" ? Material::zener : Material::elastic; },
@@ -795,6 +806,13 @@ void validate_scene(Scene& s) {
     if (f.length_m / L0 > 1e6)
       fail("fabric.spacing_mm", "more than a million nodes along the yarn (" + fmt(std::round(f.length_m / L0)) + ")");
   }
+  if (f.far_yarns_per_element > 1 && f.yarns_per_element > 1)
+    fail("fabric.far_yarns_per_element",
+         "a graded mesh lumps only outside the full-resolution band; it cannot be combined "
+         "with fabric.yarns_per_element = " +
+             fmt(f.yarns_per_element) + " (set one of them to 1)");
+  if (f.far_yarns_per_element > 1 && f.weave == Weave::single_yarn)
+    fail("fabric.far_yarns_per_element", "a single yarn has no crossing yarns to lump (set it to 1)");
   if (f.crossing_gap_m > L0) fail("fabric.crossing_gap_mm", "L1 larger than the node spacing L0 is not a woven fabric");
   if (f.crossing_compression == CrossingCompression::hyperbolic && f.flattened_gap_m >= 0.5 * f.thickness_m)
     fail("fabric.flattened_gap_mm", "the flattened centre distance (" + fmt3(f.flattened_gap_m * 1e3) +

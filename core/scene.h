@@ -40,6 +40,11 @@ struct FabricParams {
   double thickness_m = 0.40e-3;    // fabric thickness; contact diameter D = thickness / 2
   ClampedEdges clamped;
   int yarns_per_element = 1;  // k real yarns lumped into one modelled yarn
+  // Graded lumping (docs/MODEL.md §1): every real yarn within full_resolution_m of the
+  // strike point is modelled; beyond it, one modelled yarn stands for far_yarns_per_element.
+  int far_yarns_per_element = 1;        // 1 = no grading
+  double full_resolution_m = 15.0e-3;   // half-width of the band modelled yarn by yarn
+  double clamp_resolution_m = 15.0e-3;  // width of the band along each clamped edge modelled yarn by yarn
   // Transverse compression of the yarns at a crossing: rigid (the paper read literally:
   // centre distance D whatever the load) or hyperbolic, c(f) = c_min + (c0 - c_min) /
   // (1 + f / F_half), c0 the rest distance, f the crossing's normal force.

@@ -47,7 +47,9 @@ std::string fmt(const char* f, double v) {
 std::string normalise(const std::string& key, const std::string& v) {
   double d;
   if (key == "solver.dt_factor" && parse_num(v, &d)) return num(d);
-  if ((key == "solver.contact_iterations" || key == "fabric.yarns_per_element") && parse_num(v, &d))
+  if ((key == "solver.contact_iterations" || key == "fabric.yarns_per_element" ||
+       key == "fabric.far_yarns_per_element") &&
+      parse_num(v, &d))
     return num(std::round(d));
   return v;
 }
@@ -86,13 +88,15 @@ std::vector<TradeoffKnob> default_tradeoff_knobs(bool quick) {
             {"solver.precision", {"double", "float"}},
             {"solver.model", {"sliding", "pin_jointed"}},
             {"solver.symmetry", {"auto", "full"}},
-            {"fabric.yarns_per_element", {"1", "2", "4"}}};
+            {"fabric.yarns_per_element", {"1", "2", "4"}},
+            {"fabric.far_yarns_per_element", {"1", "3"}}};
   return {{"solver.dt_factor", {"0.1", "0.2", "0.3", "0.5", "0.7", "0.9"}},
           {"solver.contact_iterations", {"1", "2", "4", "8"}},
           {"solver.precision", {"double", "float"}},
           {"solver.model", {"sliding", "pin_jointed"}},
           {"solver.symmetry", {"auto", "full"}},
-          {"fabric.yarns_per_element", {"1", "2", "3", "4"}}};
+          {"fabric.yarns_per_element", {"1", "2", "3", "4"}},
+          {"fabric.far_yarns_per_element", {"1", "2", "3", "4"}}};
 }
 
 bool is_tradeoff_knob(const std::string& key) {
@@ -107,7 +111,8 @@ std::string finest_knob_value(const TradeoffKnob& knob) {
   if (key == "solver.precision") return "double";
   if (key == "solver.model") return "sliding";
   if (key == "solver.symmetry") return "auto";
-  const bool smallest = key == "solver.dt_factor" || key == "fabric.yarns_per_element";
+  const bool smallest =
+      key == "solver.dt_factor" || key == "fabric.yarns_per_element" || key == "fabric.far_yarns_per_element";
   const bool largest = key == "solver.contact_iterations";
   if (!smallest && !largest) return "";
   std::string best;
@@ -127,6 +132,7 @@ std::string scene_knob_value(const Scene& s, const std::string& key) {
   if (key == "solver.model") return s.solver.model == ContactModel::sliding ? "sliding" : "pin_jointed";
   if (key == "solver.symmetry") return s.solver.symmetry == SymmetryMode::automatic ? "auto" : "full";
   if (key == "fabric.yarns_per_element") return std::to_string(s.fabric.yarns_per_element);
+  if (key == "fabric.far_yarns_per_element") return std::to_string(s.fabric.far_yarns_per_element);
   return "";
 }
 
@@ -730,6 +736,10 @@ std::string physics_of(Scene s) {
   s.solver.model = d.solver.model;
   s.solver.symmetry = d.solver.symmetry;
   s.fabric.yarns_per_element = d.fabric.yarns_per_element;
+  // (the graded mesh's bands go with its knob: they change nothing while it is 1)
+  s.fabric.far_yarns_per_element = d.fabric.far_yarns_per_element;
+  s.fabric.full_resolution_m = d.fabric.full_resolution_m;
+  s.fabric.clamp_resolution_m = d.fabric.clamp_resolution_m;
   s.solver.threads = d.solver.threads;
   s.solver.simd = d.solver.simd;
   s.output = d.output;

@@ -63,7 +63,8 @@ int cmd_tradeoff(const Args& args) {
       if (!studies::is_tradeoff_knob(v.key))
         throw UsageError("--knob " + v.key +
                          ": not a speed/accuracy knob (solver.dt_factor, solver.contact_iterations, "
-                         "solver.precision, solver.model, solver.symmetry, fabric.yarns_per_element)");
+                         "solver.precision, solver.model, solver.symmetry, fabric.yarns_per_element, "
+                         "fabric.far_yarns_per_element)");
       for (auto& kn : opt.knobs)
         if (kn.key == v.key) kn.values = v.values;
     }
