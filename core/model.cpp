@@ -416,6 +416,7 @@ Model build_model(const Scene& scene) {
     const double bend = y.bending_fraction;
     // Pin-jointed nodes carry two yarns' mass, but each direction only one yarn's stiffness.
     m.critical_dt_factor = std::sqrt(m_line / k_axial) / std::sqrt(1.0 + bend) * m.wave_speed / m.shortest_element;
+    m.held_dt_factor = m.critical_dt_factor * (!single && m.projectile_holds ? std::sqrt(3.0) / 2 : 1.0);
   }
   m.end_time = scene.solver.end_time_s;
   // Snap damping: a fraction zeta of critical at the chain's highest axial frequency

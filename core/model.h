@@ -124,6 +124,10 @@ struct Model {
   double wave_speed = 0;  // sqrt(E_inst / rho)
   double shortest_element = 0;
   double critical_dt_factor = 1.0;  // estimate of the alpha at which central differences go unstable
+  // The same with a node held on the projectile (an effective stiffness m / dt^2 from the
+  // push-out, docs/MODEL.md §3): sqrt(3)/2 of critical_dt_factor when the projectile holds
+  // nodes, which long runs near the ballistic limit meet.
+  double held_dt_factor = 1.0;
   double element_damping_beta = 0;  // s: beta of the snap damping (solver.snap_damping x L / c)
   double end_time = 0;
 

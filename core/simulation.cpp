@@ -452,10 +452,15 @@ struct Simulation::Impl {
   std::string advice() const {
     const Model& m = model();
     const double alpha = scene.solver.dt_factor;
-    if (alpha > 0.9 * m.critical_dt_factor)
+    if (alpha > 0.9 * m.held_dt_factor) {
+      const std::string held = m.held_dt_factor < m.critical_dt_factor
+                                   ? ", about " + fmt("%.2f", m.held_dt_factor) +
+                                         " once nodes ride on the projectile in a long run (docs/MODEL.md §3)"
+                                   : "";
       return "solver.dt_factor = " + fmt("%.3g", alpha) +
              " is at or beyond the central-difference stability limit (about " + fmt("%.2f", m.critical_dt_factor) +
-             " for this mesh): lower solver.dt_factor (default 0.5)";
+             " for this mesh" + held + "): lower solver.dt_factor (default 0.5)";
+    }
     return "lower solver.dt_factor (default 0.5) or raise solver.contact_iterations; check the scene's units";
   }
 };

@@ -362,7 +362,8 @@ std::vector<std::string> stability_sentences(const StabilityResult& r) {
       for (const auto& [yv, crit] : r.critical_dt)
         if (yv == y && m.x.key == "solver.dt_factor")
           s += " [theory: critical dt_factor about " + fmt("%.2f", crit) +
-               " for this mesh (core/model.h critical_dt_factor)]";
+               " for this mesh, sqrt(3)/2 of it once nodes ride on the projectile in a long run (core/model.h "
+               "critical_dt_factor, held_dt_factor)]";
       out.push_back(s);
     }
   }

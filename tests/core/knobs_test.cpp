@@ -50,6 +50,21 @@ TEST(Stability, SingleYarnBoundaryWhereTheoryPutsIt) {
   EXPECT_EQ(above.status, RunStatus::diverged);
 }
 
+// The held-node bound (docs/MODEL.md §3): on the default scene long runs near the ballistic
+// limit completed at dt_factor 0.7 (30 runs of 77-84 m/s, up to 5 ms) and diverged at 0.9
+// (69.7 m/s, at 842 us; docs/tradeoff.md), so the model's estimate must lie between them,
+// below the chain's own estimate, which does not see the held nodes.
+TEST(Stability, HeldNodeBoundLiesWhereLongRunsFail) {
+  const Model m = build_model(test::scene_with({}));
+  EXPECT_GT(m.held_dt_factor, 0.7);
+  EXPECT_LT(m.held_dt_factor, 0.9);
+  EXPECT_LT(m.held_dt_factor, m.critical_dt_factor);
+  EXPECT_GT(m.critical_dt_factor, 0.9);  // the chain alone would pass 0.9
+  // A single yarn (the chain test above) has no held-node factor.
+  const Model y = build_model(test::scene_with({"fabric.weave=single_yarn"}));
+  EXPECT_DOUBLE_EQ(y.held_dt_factor, y.critical_dt_factor);
+}
+
 // Float against double: before failure the two agree to float rounding (projectile
 // velocity to 1e-5, stored energy to 1e-3 relative); through failure and perforation the
 // residual velocity agrees within 1 % (breaks are threshold events that rounding shifts).
