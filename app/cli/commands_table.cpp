@@ -47,7 +47,8 @@ std::vector<Command> make_table() {
          "at UI frame FRAME do ACTION (repeatable): play, pause, step, reset, restart, clear, fast, "
          "slow:US_PER_S, set:KEY=VALUE, view:NAME, field:NAME, colormap:NAME, range:LO:HI (or range:auto), "
          "scrub:T_US, live, pick:ELEMENT_ID, pick-crossing:ID, open:PATH, screenshot:FILE, export-results, "
-         "export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST, limit, demo:NAME, continue, "
+         "export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST[;KEY=LIST], sweep-charts[:X_KEY], limit, demo:NAME, "
+         "continue, "
          "compare-exit"},
         {"budget-mb", "MB", false, "memory for the kept frames of a run (time slider; default 256)"},
         {"export-dir", "DIR", false, "the Export panel's folder (default: ./ravel_export)"}}});

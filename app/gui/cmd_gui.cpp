@@ -14,8 +14,8 @@
 //                          range:LO:HI | range:auto, scrub:T_US, live, pick:ELEMENT_ID,
 //                          pick-crossing:ID, open:PATH, screenshot:FILE, export-results,
 //                          export-scene, export-vtk:DIR, record:DIR (image sequence),
-//                          sweep:KEY=LIST, limit[:JOBS] (into --export-dir; JOBS runs in flight), demo:NAME, continue,
-//                          compare-exit
+//                          sweep:KEY=LIST[;KEY=LIST], sweep-charts[:X_KEY], limit[:JOBS] (into --export-dir; JOBS runs
+//                          in flight), demo:NAME, continue, compare-exit
 //   --pause-at-us T        pause the run when simulated time reaches T; with --frames the
 //                          app keeps going past frame N until then (for reproducible pictures),
 //                          and until scripted exports and studies have finished
@@ -96,15 +96,15 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
         "play",          "pause", "step",       "reset",          "restart",      "clear",      "fast",   "slow",
         "set",           "view",  "field",      "colormap",       "range",        "scrub",      "live",   "pick",
         "pick-crossing", "open",  "screenshot", "export-results", "export-scene", "export-vtk", "record", "sweep",
-        "limit",         "demo",  "continue",   "compare-exit",   "wait"};
+        "sweep-charts",  "limit", "demo",       "continue",       "compare-exit", "wait"};
     if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return a.action == k; }) ==
         std::end(known))
       throw UsageError(
           "--do: unknown action '" + a.action +
           "' (play, pause, step, reset, restart, clear, fast, slow:RATE, set:KEY=VALUE, view:NAME, "
           "field:NAME, colormap:NAME, range:LO:HI, scrub:T_US, live, pick:ID, pick-crossing:ID, open:PATH, "
-          "screenshot:FILE, export-results, export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST, "
-          "limit, wait, demo:NAME, continue, compare-exit)");
+          "screenshot:FILE, export-results, export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST[;KEY=LIST], "
+          "sweep-charts[:X_KEY], limit, wait, demo:NAME, continue, compare-exit)");
     // Arguments that can be checked before the window opens.
     if ((a.action == "scrub" || a.action == "pick" || a.action == "pick-crossing") &&
         (a.arg.empty() || !std::isfinite(std::strtod(a.arg.c_str(), &end)) || *end))
@@ -208,6 +208,8 @@ void apply_script_action(GuiApp& app, const ScriptAction& a) {
     if (!gui::start_image_export(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "sweep") {
     if (!gui::start_scripted_sweep(app, a.arg)) script_failed(app, app.notice);
+  } else if (a.action == "sweep-charts") {
+    if (!gui::write_scripted_sweep_charts(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "limit") {
     if (!gui::start_scripted_limit(app, a.arg)) script_failed(app, app.notice);
   } else if (a.action == "demo") {  // the Demos menu (app/gui/gui_demos.h)

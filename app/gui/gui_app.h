@@ -174,7 +174,9 @@ void step_export(GuiApp& app, render::Renderer& renderer, int view_w_px, int vie
 bool export_running(const GuiApp& app);
 bool studies_running(const GuiApp& app);
 // Scripted studies (--do sweep:KEY=LIST, --do limit): start into export_dir/sweep, /limit.
-bool start_scripted_sweep(GuiApp& app, const std::string& vary);
+bool start_scripted_sweep(GuiApp& app, const std::string& vary);  // KEY=LIST[;KEY=LIST...]
+// The sweep's charts into its folder's charts/ (the window's Save charts), x = x_key if given.
+bool write_scripted_sweep_charts(GuiApp& app, const std::string& x_key);
 bool start_scripted_limit(GuiApp& app, const std::string& jobs = "");  // jobs: runs in flight, "" = the window's
 std::string next_screenshot_path(const GuiApp& app);
 

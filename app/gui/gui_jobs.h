@@ -75,6 +75,7 @@ struct StudiesWindow {
   int jobs = 1;
   std::string sweep_error;
   int chart_index = 0;
+  std::string chart_x;  // the charts' x axis: a varied key ("" = the first), as `ravel sweep --chart-x`
   studies::SweepRunner sweep;
   // Ballistic limit.
   char limit_dir[512] = "";

@@ -113,6 +113,8 @@ LimitRunner::Snapshot LimitRunner::snapshot() const {
 
 // ----------------------------------------------------------------------------- windows
 
+bool write_sweep_charts(GuiApp& app);  // below: the Sweep window's Save charts
+
 namespace {
 
 // The scene on screen as a file in `dir` (what the study runs), and its path.
@@ -181,6 +183,20 @@ std::vector<std::string> lines_of(const char* text) {
 
 const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
 
+void help_marker_studies(const char* text) {
+  ImGui::SameLine();
+  ImGui::TextDisabled("(?)");
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text);
+}
+
+// The varied keys with the chosen x-axis key first (the first key when none is chosen or it
+// is not varied in this sweep).
+std::vector<std::string> sweep_chart_keys(const StudiesWindow& w, std::vector<std::string> keys) {
+  const auto it = std::find(keys.begin(), keys.end(), w.chart_x);
+  if (it != keys.end()) std::rotate(keys.begin(), it, it + 1);
+  return keys;
+}
+
 void sweep_window(GuiApp& app) {
   StudiesWindow& w = *app.studies;
   if (!w.show_sweep) return;
@@ -218,8 +234,21 @@ void sweep_window(GuiApp& app) {
   if (s.finished)
     ImGui::Text("done: %d run, %d resumed in %.1f s; %s/results.csv", s.report.cases_run, s.report.cases_skipped,
                 s.report.wall_time_s, w.sweep_dir);
-  const auto charts = s.charts();
+  // With several varied keys the charts can put any of them on x (the others make the series).
+  if (s.varied_keys.size() > 1) {
+    const std::string shown = sweep_chart_keys(w, s.varied_keys).front();
+    if (ImGui::BeginCombo("x axis", shown.c_str())) {
+      for (const auto& k : s.varied_keys)
+        if (ImGui::Selectable(k.c_str(), k == shown)) w.chart_x = k;
+      ImGui::EndCombo();
+    }
+  }
+  const auto charts = studies::sweep_charts(s.results, sweep_chart_keys(w, s.varied_keys));
   if (!charts.empty()) {
+    ImGui::BeginDisabled(s.running);
+    if (ImGui::Button("Save charts")) write_sweep_charts(app);
+    ImGui::EndDisabled();
+    help_marker_studies("PNG, SVG and CSV of the charts into the sweep folder's charts/, as ravel sweep writes them.");
     w.chart_index = std::min(w.chart_index, int(charts.size()) - 1);
     for (int i = 0; i < int(charts.size()); ++i) {
       if (i) ImGui::SameLine();
@@ -350,11 +379,59 @@ bool studies_running(const GuiApp& app) {
   return app.studies->sweep.running() || app.studies->limit.running();
 }
 
+bool write_sweep_charts(GuiApp& app) {
+  StudiesWindow& w = *app.studies;
+  const studies::SweepRunner::Snapshot s = w.sweep.snapshot();
+  try {
+    if (s.running) throw std::runtime_error("the sweep is still running");
+    const auto charts = studies::sweep_charts(s.results, sweep_chart_keys(w, s.varied_keys));
+    const std::string dir = std::string(w.sweep_dir) + "/charts";
+    int n = 0;
+    for (const auto& [stem, chart] : charts) {
+      if (studies::finite_point_count(chart) == 0) continue;
+      if (n == 0) prepare_output_dir(dir);
+      studies::write_chart(chart, dir + "/" + stem);
+      ++n;
+    }
+    if (n == 0) throw std::runtime_error("no chart has a point to draw yet");
+    app.notice = "wrote " + std::to_string(n) + " sweep charts into " + dir;
+    app.notice_is_error = false;
+    return true;
+  } catch (const std::exception& e) {
+    app.notice = std::string("sweep charts: ") + e.what();
+    app.notice_is_error = true;
+    return false;
+  }
+}
+
+bool write_scripted_sweep_charts(GuiApp& app, const std::string& x_key) {
+  StudiesWindow& w = *app.studies;
+  const auto keys = w.sweep.snapshot().varied_keys;
+  if (!x_key.empty() && std::find(keys.begin(), keys.end(), x_key) == keys.end()) {
+    std::string varied;
+    for (const auto& k : keys) varied += (varied.empty() ? "" : ", ") + k;
+    app.notice = "sweep-charts: " + x_key + " is not a varied key of the sweep (it varies " + varied + ")";
+    app.notice_is_error = true;
+    return false;
+  }
+  if (!x_key.empty()) w.chart_x = x_key;
+  return write_sweep_charts(app);
+}
+
 bool start_scripted_sweep(GuiApp& app, const std::string& vary) {
   StudiesWindow& w = *app.studies;
   w.show_sweep = true;
-  std::snprintf(w.vary, sizeof w.vary, "%s", vary.c_str());
-  const bool ok = start_sweep(app, {vary});
+  // Several keys: KEY=LIST;KEY=LIST (one line each in the window).
+  std::vector<std::string> lines;
+  std::string text;
+  for (size_t a = 0; a <= vary.size();) {
+    const size_t b = std::min(vary.find(';', a), vary.size());
+    if (b > a) lines.push_back(vary.substr(a, b - a));
+    text += (text.empty() ? "" : "\n") + vary.substr(a, b - a);
+    a = b + 1;
+  }
+  std::snprintf(w.vary, sizeof w.vary, "%s", text.c_str());
+  const bool ok = start_sweep(app, lines);
   if (!ok) {
     app.notice = "sweep: " + w.sweep_error;
     app.notice_is_error = true;

@@ -16,6 +16,9 @@
 #                 an image sequence
 #   sweep         a sweep panel run of 2 velocities writes the same results.csv (timing
 #                 columns aside) as `ravel sweep` with the same values
+#   sweep-x       a sweep panel run of two keys charted over the second (sweep-charts:KEY)
+#                 writes the charts `ravel sweep --chart-x KEY` writes, number for number; an
+#                 x key the sweep does not vary is refused (the app exits non-zero)
 #
 # usage: gui_feature_test.sh RAVEL OUT_DIR CASE [ARG] [PYTHON3]
 set -euo pipefail
@@ -184,6 +187,33 @@ for ra, rb in zip(a, b):
             raise SystemExit(f"FAIL: {k}: app {ra.get(k)!r} != ravel sweep {rb[k]!r}")
 print("the app's sweep equals ravel sweep:", [r["residual_velocity_mps"] for r in a])
 EOF
+  ;;
+
+sweep-x)
+  vary="projectile.velocity_mps=450,500;yarn.friction=0.1,0.3"
+  run_gui 1280 720 --frames 8 --paused --export-dir "$out/app" --do "2:sweep:$vary" --do 3:wait \
+    --do 4:sweep-charts:yarn.friction --do 5:wait
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  "$ravel" sweep --vary projectile.velocity_mps=450,500 --vary yarn.friction=0.1,0.3 --chart-x yarn.friction \
+    --jobs 1 --out "$out/cli" --quiet >/dev/null
+  for f in residual_velocity_mps_vs_yarn.friction energy_absorbed_J_vs_yarn.friction; do
+    [ -s "app/sweep/charts/$f.png" ] || fail "the app wrote no charts/$f.png"
+    cmp "app/sweep/charts/$f.csv" "cli/charts/$f.csv" || fail "charts/$f.csv differs from ravel sweep --chart-x"
+  done
+  "$python" - app/sweep/charts/residual_velocity_mps_vs_yarn.friction.csv <<'EOF2'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+print("the app's chart over yarn.friction:", rows[:3])
+if len(rows) < 3:
+    raise SystemExit("FAIL: the chart has fewer than two points")
+EOF2
+  # A key the sweep does not vary (the same sweep, resumed: nothing runs again): refused, the
+  # app says so and exits non-zero.
+  run_gui 1280 720 --frames 8 --paused --export-dir "$out/app" --do "2:sweep:$vary" --do 3:wait \
+    --do 4:sweep-charts:yarn.area_m2 --do 5:wait
+  [ "$rc" -ne 0 ] || fail "an x key the sweep does not vary was accepted"
+  grep -q "yarn.area_m2 is not a varied key" log.txt err.txt || fail "the refusal does not name the key"
   ;;
 
 limit)
