@@ -255,6 +255,10 @@ std::vector<Shot> kept_runs(const std::string& scene_path, const std::vector<std
 // One run of limit.json's "runs" (or of a kept DIR/runs/ file) read back.
 Shot shot_from_json(const nlohmann::json& q);
 
+// A lumped or graded mesh moves the default scene's ballistic limit by several m/s
+// (docs/tradeoff.md): the warning a search on such a scene carries, "" for a full mesh.
+std::string lumped_mesh_warning(const Scene& scene);
+
 // limit.json: the result, the fit, every run, and what was run.
 std::string limit_json(const LimitResult& r, const LimitOptions& opt, const std::string& scene_path,
                        const std::vector<std::string>& overrides);

@@ -275,8 +275,9 @@ int limit_fast(const CommonArgs& a, const Scene& scene, const std::string& scene
     std::printf("    %s\n", p.line().c_str());
     std::fflush(stdout);
   };
-  const studies::LimitResult r = studies::find_ballistic_limit_fast(
-      studies::scene_runner(scene_path, ov, {}, a.out_dir), lo, with_fit, &interrupt_flag(), hooks, prior);
+  studies::LimitResult r = studies::find_ballistic_limit_fast(studies::scene_runner(scene_path, ov, {}, a.out_dir), lo,
+                                                              with_fit, &interrupt_flag(), hooks, prior);
+  if (const std::string w = studies::lumped_mesh_warning(scene); !w.empty()) r.warnings.push_back(w);
   write_file_atomic(a.out_dir + "/limit.json", studies::limit_json(r, lo, scene_path, ov));
   if (r.interrupted) {
     std::fprintf(stderr,
@@ -350,6 +351,7 @@ int cmd_limit(const Args& args) {
     studies::LimitResult r;
     try {
       r = studies::find_ballistic_limit(logged, lo, with_fit);
+      if (const std::string w = studies::lumped_mesh_warning(scene); !w.empty()) r.warnings.push_back(w);
     } catch (const std::exception& e) {
       if (interrupt_flag().load()) {
         // Keep what finished: limit.json lists the finished runs (no limit yet), and DIR/runs/

@@ -78,6 +78,8 @@ bool LimitRunner::start(const std::string& scene_path, const std::vector<std::st
       };
       studies::LimitResult r = studies::find_ballistic_limit_fast(studies::scene_runner(scene_path, ov, {}, out_dir),
                                                                   opt, true, &interrupt_, hooks, prior);
+      if (const std::string w = studies::lumped_mesh_warning(load_scene(scene_path, ov)); !w.empty())
+        r.warnings.push_back(w);
       write_file_atomic(out_dir + "/limit.json", studies::limit_json(r, opt, scene_path, ov));
       std::lock_guard<std::mutex> lock(mu_);
       state_.in_flight.clear();

@@ -152,6 +152,18 @@ names = [r["name"] for r in j["rules"]]
 assert "residual_guess" not in names and "cancel_moot" not in names and "ksection" in names, names
 assert j["runs_cancelled"] == 0, j["runs_cancelled"]
 PY
+# A search on a graded mesh says in limit.json that its limit is not the full mesh's; the
+# full-mesh searches above say nothing of the kind.
+"$RAVEL" limit "${CHEAP[@]}" --set fabric.far_yarns_per_element=2 --set fabric.full_resolution_mm=4 \
+  --set fabric.clamp_resolution_mm=2 --start 50 --tolerance 5 --jobs 2 --out "$WORK/limit_graded" \
+  >"$WORK/limit_graded.out" 2>&1 || fail "limit on a graded mesh: $(cat "$WORK/limit_graded.out")"
+/usr/bin/python3 - "$WORK/limit_graded/limit.json" "$WORK/limit_without/limit.json" <<'PY' || fail "limit: graded-mesh warning"
+import json, sys
+g = json.load(open(sys.argv[1]))["warnings"]
+f = json.load(open(sys.argv[2]))["warnings"]
+assert any("fabric.far_yarns_per_element = 2" in w and "full mesh" in w for w in g), g
+assert not any("mesh is graded" in w or "mesh is lumped" in w for w in f), f
+PY
 out=$("$RAVEL" limit "${CHEAP[@]}" --without guess --out "$WORK/limit_bad" 2>&1)
 [[ $? == 2 ]] && grep -q "unknown rule 'guess'" <<<"$out" || fail "limit --without guess: $out"
 
