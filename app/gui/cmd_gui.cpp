@@ -125,6 +125,7 @@ void script_failed(GuiApp& app, const std::string& what) {
   app.notice = what;
   app.notice_is_error = true;
   app.script_failed = true;
+  app.script_error = what;
   std::fprintf(stderr, "ravel: --do: %s\n", what.c_str());
 }
 
@@ -740,7 +741,9 @@ int cmd_gui(const Args& args) {
             view_ms_total / double(std::max(1L, single.draws())), ImGui::GetIO().MetricsRenderVertices, sim_at_end_us,
             app.view.run_id, to_string(app.view.state), app.view.scene.yarn.friction, load1, app.timeline.size(),
             double(app.timeline.bytes()) / (1 << 20));
-        if (app.notice_is_error) std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
+        // (an error a scripted action reported is on stderr already)
+        if (app.notice_is_error && app.notice != app.script_error)
+          std::fprintf(stderr, "ravel: %s\n", app.notice.c_str());
       }
       if (app.layout_check) {
         // Each problem once (they repeat every frame).

@@ -90,6 +90,7 @@ struct GuiApp {
   std::string notice;  // last export / action result, shown in the status panel
   bool notice_is_error = false;
   bool script_failed = false;   // a scripted action failed: the app exits non-zero at the end
+  std::string script_error;     // its message, already on stderr (not repeated at exit)
   bool script_waiting = false;  // a scripted `wait` holds the script until the app is idle
   bool layout_check = false;    // RAVEL_LAYOUT_CHECK: open every section, report clipped panels
   std::vector<std::string> layout_problems;

@@ -203,7 +203,8 @@ void sweep_window(GuiApp& app) {
   StudiesWindow& w = *app.studies;
   if (!w.show_sweep) return;
   const float fs = ImGui::GetFontSize();
-  ImGui::SetNextWindowSize(ImVec2(fs * 38, fs * 30), ImGuiCond_FirstUseEver);
+  // (wide and tall enough for a two-key chart and its legend)
+  ImGui::SetNextWindowSize(ImVec2(fs * 50, fs * 38), ImGuiCond_FirstUseEver);
   if (!ImGui::Begin("Sweep", &w.show_sweep)) {
     ImGui::End();
     return;

@@ -214,6 +214,8 @@ EOF2
     --do 4:sweep-charts:yarn.area_m2 --do 5:wait
   [ "$rc" -ne 0 ] || fail "an x key the sweep does not vary was accepted"
   grep -q "yarn.area_m2 is not a varied key" log.txt err.txt || fail "the refusal does not name the key"
+  n=$(grep -c "yarn.area_m2 is not a varied key" err.txt || true)
+  [ "$n" -eq 1 ] || fail "the refusal is on stderr $n times, not once"
   ;;
 
 limit)
