@@ -103,10 +103,10 @@ Model build_model(const Scene& scene) {
     // Every real yarn within the band; outside it every kf-th, counted from the edge
     // inwards (so the clamped or free edge yarn is modelled and mirrored halves match).
     const double band = f.full_resolution_m + 1e-9 * L0;
-    const double clamp_band = f.clamp_resolution_m;
+    const double clamp_band = f.clamp_resolution_m + 1e-9 * L0;
     auto fine = [&](int I) {
-      return std::abs(I * L0 - centre_m) <= band || (clamp_lo && (I - lo) * L0 <= clamp_band + 1e-9 * L0) ||
-             (clamp_hi && (hi - I) * L0 <= clamp_band + 1e-9 * L0);
+      return std::abs(I * L0 - centre_m) <= band || (clamp_lo && (I - lo) * L0 <= clamp_band) ||
+             (clamp_hi && (hi - I) * L0 <= clamp_band);
     };
     std::vector<char> keep(size_t(hi - lo + 1), 0);
     for (int I = lo; I <= hi; ++I) keep[size_t(I - lo)] = fine(I);
@@ -151,14 +151,17 @@ Model build_model(const Scene& scene) {
   };
   const std::vector<double> wi_of = weights(gi, can_x), wj_of = weights(gj, can_y);
   // Zig-zag parity by modelled index (every yarn alternates over and under), anchored at
-  // the modelled yarn nearest the strike point so the centre crossing keeps the warp on top.
+  // the centre yarn so the centre crossing keeps the warp on top; without grading the
+  // modelled index is I - i_min, and this is the parity of I + J.
   auto anchor = [](const std::vector<int>& idx) {
     size_t best = 0;
     for (size_t a = 0; a < idx.size(); ++a)
       if (std::abs(idx[a]) < std::abs(idx[best])) best = a;
     return int(best) - idx[best];
   };
-  const int pi0 = graded ? anchor(gi) : 0, pj0 = graded ? anchor(gj) : 0;
+  const int pi0 = anchor(gi), pj0 = anchor(gj);
+  // Warp yarn a (it runs along y) over weft yarn b at their crossing.
+  auto warp_on_top = [&](int a, int b) { return ((a + pi0 + b + pj0) % 2 + 2) % 2 == 0; };
   const int ni = int(gi.size()), nj = int(gj.size());
 
   // ---- material
@@ -225,8 +228,7 @@ Model build_model(const Scene& scene) {
     for (int a = 0; a < ni; ++a)
       for (int b = 0; b < nj; ++b) {
         const int I = gi[size_t(a)], J = gj[size_t(b)];
-        const bool warp_top =
-            graded ? ((a + pi0 + b + pj0) % 2 + 2) % 2 == 0 : ((I + J) % 2 + 2) % 2 == 0;  // warp yarn I runs along y
+        const bool warp_top = warp_on_top(a, b);
         const size_t at = size_t(a) * nj + b;
         const double wa = wi_of[size_t(a)], wb = wj_of[size_t(b)];
         const double mass = node_mass * wa * wb * plane_factor(I, J);
@@ -302,6 +304,7 @@ Model build_model(const Scene& scene) {
       const Vec3d d = m.x0[m.yarn_node(yy, kk + 1)] - m.x0[m.yarn_node(yy, kk)];
       return sliding ? d.norm() : std::hypot(d.x(), d.y());
     };
+    auto bend_len = [&](int e) { return graded ? m.elem_rest[size_t(e)] * (1 + m.crimp_strain) : crimped; };
     for (int kk = 0; kk + 1 < n; ++kk) {
       m.elem_a.push_back(m.yarn_node(yy, kk));
       m.elem_b.push_back(m.yarn_node(yy, kk + 1));
@@ -313,8 +316,7 @@ Model build_model(const Scene& scene) {
     for (int kk = 0; kk + 2 < n; ++kk) {
       m.bend_e1.push_back(e0 + kk);
       m.bend_e2.push_back(e0 + kk + 1);
-      const double bend_len = graded ? m.elem_rest[size_t(e0 + kk)] * (sliding ? 1.0 : 1.0 + m.crimp_strain) : crimped;
-      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len);
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len(e0 + kk));
       // Midpoint distance at rest: along the yarn the zig-zag midpoints sit L0 apart.
       const Vec3d m1 = 0.5 * (m.x0[m.yarn_node(yy, kk)] + m.x0[m.yarn_node(yy, kk + 1)]);
       const Vec3d m2 = 0.5 * (m.x0[m.yarn_node(yy, kk + 1)] + m.x0[m.yarn_node(yy, kk + 2)]);
@@ -329,8 +331,7 @@ Model build_model(const Scene& scene) {
       const Vec3d mid = 0.5 * (m.x0[m.yarn_node(yy, 0)] + m.x0[m.yarn_node(yy, 1)]);
       m.bend_e1.push_back(e0);
       m.bend_e2.push_back(e0);
-      const double bend_len = graded ? m.elem_rest[size_t(e0)] * (sliding ? 1.0 : 1.0 + m.crimp_strain) : crimped;
-      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len);
+      m.bend_k.push_back(y.bending_fraction * m.modulus_inst * a / bend_len(e0));
       m.bend_rest.push_back(2 * std::abs(mid[ax]));
       m.bend_mirror.push_back(ax);
     }
@@ -363,8 +364,7 @@ Model build_model(const Scene& scene) {
         if (m.fixed[m.yarn_node(c.warp_yarn, c.warp_node)] == fix_all ||
             m.fixed[m.yarn_node(c.weft_yarn, c.weft_node)] == fix_all)
           continue;
-        const bool warp_top =
-            graded ? ((wi + pi0 + fj + pj0) % 2 + 2) % 2 == 0 : ((c.grid_i + c.grid_j) % 2 + 2) % 2 == 0;
+        const bool warp_top = warp_on_top(wi, fj);
         // t_warp x t_weft ~ y x x = -z; n must point from warp to weft: -z when the warp is on top.
         c.side = warp_top ? 1.0 : -1.0;
         // Rest distance between the two yarns' adjoining segments: the zig-zag brings them a

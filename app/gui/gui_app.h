@@ -147,6 +147,8 @@ void draw_timeline_bar(GuiApp& app);  // the time slider under the 3D view (gui_
 // With app.layout_check: note the current fixed panel's content that does not fit it
 // (wider than the panel, or taller without a scroll bar). Call before its End().
 void check_layout(GuiApp& app, const char* panel);
+// A "(?)" after the last item whose tooltip is `text` (gui_panels.cpp).
+void help_marker(const char* text);
 void draw_picked_window(GuiApp& app);    // the picked element or crossing (gui_timeline.cpp)
 void draw_keys_window(GuiApp& app);      // every scene key (gui_keys.cpp)
 void draw_open_window(GuiApp& app);      // Open scene (gui_keys.cpp)

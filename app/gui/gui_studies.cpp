@@ -185,12 +185,6 @@ std::vector<std::string> lines_of(const char* text) {
 
 const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
 
-void help_marker_studies(const char* text) {
-  ImGui::SameLine();
-  ImGui::TextDisabled("(?)");
-  if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", text);
-}
-
 // The varied keys with the chosen x-axis key first (the first key when none is chosen or it
 // is not varied in this sweep).
 std::vector<std::string> sweep_chart_keys(const StudiesWindow& w, std::vector<std::string> keys) {
@@ -251,7 +245,7 @@ void sweep_window(GuiApp& app) {
     ImGui::BeginDisabled(s.running);
     if (ImGui::Button("Save charts")) write_sweep_charts(app);
     ImGui::EndDisabled();
-    help_marker_studies("PNG, SVG and CSV of the charts into the sweep folder's charts/, as ravel sweep writes them.");
+    help_marker("PNG, SVG and CSV of the charts into the sweep folder's charts/, as ravel sweep writes them.");
     w.chart_index = std::min(w.chart_index, int(charts.size()) - 1);
     for (int i = 0; i < int(charts.size()); ++i) {
       if (i) ImGui::SameLine();
