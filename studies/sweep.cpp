@@ -308,6 +308,19 @@ Csv parse_csv(const std::string& text) {
   return csv;
 }
 
+bool put_chart_x_first(std::vector<std::string>* keys, const std::string& x_key) {
+  const auto it = std::find(keys->begin(), keys->end(), x_key);
+  if (it == keys->end()) return false;
+  std::rotate(keys->begin(), it, it + 1);
+  return true;
+}
+
+std::string joined_keys(const std::vector<std::string>& keys) {
+  std::string s;
+  for (const auto& k : keys) s += (s.empty() ? "" : ", ") + k;
+  return s;
+}
+
 std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
                                                         const std::vector<std::string>& varied_keys) {
   std::vector<std::pair<std::string, Chart>> out;

@@ -162,6 +162,11 @@ Csv parse_csv(const std::string& text);
 // other varied keys. Each chart's file stem is returned beside it.
 std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
                                                         const std::vector<std::string>& varied_keys);
+// The varied keys with x_key first, for sweep_charts (`ravel sweep --chart-x`, the app's x
+// axis): false, keys unchanged, when x_key is not among them.
+bool put_chart_x_first(std::vector<std::string>* keys, const std::string& x_key);
+// "a, b, c": the keys a sweep varies, for messages.
+std::string joined_keys(const std::vector<std::string>& keys);
 std::string read_text_file(const std::string& path);
 
 }  // namespace ravel::studies

@@ -103,16 +103,9 @@ int cmd_sweep(const Args& args) {
     }
     // The charts' x axis: the first --vary key unless --chart-x names another (cases keep their names).
     std::vector<std::string> chart_keys = keys;
-    if (a.flags.count("chart-x")) {
-      const std::string x = a.flags["chart-x"];
-      const auto it = std::find(chart_keys.begin(), chart_keys.end(), x);
-      if (it == chart_keys.end()) {
-        std::string varied;
-        for (const auto& k : keys) varied += (varied.empty() ? "" : ", ") + k;
-        throw UsageError("--chart-x " + x + ": not a --vary key of this sweep (it varies " + varied + ")");
-      }
-      std::rotate(chart_keys.begin(), it, it + 1);
-    }
+    if (a.flags.count("chart-x") && !studies::put_chart_x_first(&chart_keys, a.flags["chart-x"]))
+      throw UsageError("--chart-x " + a.flags["chart-x"] + ": not a --vary key of this sweep (it varies " +
+                       studies::joined_keys(keys) + ")");
     const auto all = studies::expand_cases(vary);
     const auto mine = studies::shard_cases(all, opt.shard);
     const bool verbose = progress_wanted(a);

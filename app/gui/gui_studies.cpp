@@ -188,8 +188,7 @@ const ImVec4 kBad(1.0f, 0.42f, 0.38f, 1.0f);
 // The varied keys with the chosen x-axis key first (the first key when none is chosen or it
 // is not varied in this sweep).
 std::vector<std::string> sweep_chart_keys(const StudiesWindow& w, std::vector<std::string> keys) {
-  const auto it = std::find(keys.begin(), keys.end(), w.chart_x);
-  if (it != keys.end()) std::rotate(keys.begin(), it, it + 1);
+  studies::put_chart_x_first(&keys, w.chart_x);
   return keys;
 }
 
@@ -403,11 +402,10 @@ bool write_sweep_charts(GuiApp& app) {
 
 bool write_scripted_sweep_charts(GuiApp& app, const std::string& x_key) {
   StudiesWindow& w = *app.studies;
-  const auto keys = w.sweep.snapshot().varied_keys;
-  if (!x_key.empty() && std::find(keys.begin(), keys.end(), x_key) == keys.end()) {
-    std::string varied;
-    for (const auto& k : keys) varied += (varied.empty() ? "" : ", ") + k;
-    app.notice = "sweep-charts: " + x_key + " is not a varied key of the sweep (it varies " + varied + ")";
+  auto keys = w.sweep.snapshot().varied_keys;
+  if (!x_key.empty() && !studies::put_chart_x_first(&keys, x_key)) {
+    app.notice =
+        "sweep-charts: " + x_key + " is not a varied key of the sweep (it varies " + studies::joined_keys(keys) + ")";
     app.notice_is_error = true;
     return false;
   }
