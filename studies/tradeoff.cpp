@@ -756,20 +756,52 @@ std::vector<std::string> shipped_tradeoff_suggestions(const Scene& scene) {
     const std::string text = read_text_file(path);
     // Only for the scene it was measured on: the shipped scene of that name with the
     // recorded overrides, apart from the knobs themselves.
-    {
-      const auto j = ojson::parse(text, nullptr, false);
-      if (j.is_discarded() || !j.is_object()) return {};
-      const auto ov = j.value("overrides", std::vector<std::string>{});
-      const Scene measured = load_scene(assets_dir() + "/scenes/" + scene.name + ".toml", ov);
-      if (physics_of(measured) != physics_of(scene)) return {};
-    }
+    const auto j = ojson::parse(text, nullptr, false);
+    if (j.is_discarded() || !j.is_object()) return {};
+    const auto ov = j.value("overrides", std::vector<std::string>{});
+    const Scene measured = load_scene(assets_dir() + "/scenes/" + scene.name + ".toml", ov);
+    if (physics_of(measured) != physics_of(scene)) return {};
     auto out = tradeoff_suggestions(scene, text, 0.01);
     for (const auto& s5 : tradeoff_suggestions(scene, text, 0.05)) {
       const std::string knob = s5.substr(0, s5.find('='));
       if (std::none_of(out.begin(), out.end(), [&](const std::string& s1) { return s1.rfind(knob + "=", 0) == 0; }))
         out.push_back(s5);
     }
-    return out;
+    // Each row varied one knob with the others at the measurement's base (the measured
+    // scene's values, or the reference's with --around reference): a knob's suggestion holds
+    // only where the run's other knobs are at that base (a pin-jointed run is not told what
+    // a graded mesh did to the sliding model).
+    const bool around_reference = j.value("around", std::string("scene")) == "reference";
+    const std::string ref_case = j.contains("reference") && j["reference"].is_object()
+                                     ? j["reference"].value("case", std::string())
+                                     : std::string();
+    auto base_value = [&](const std::string& knob) -> std::string {
+      if (!around_reference) return scene_knob_value(measured, knob);
+      const std::string key = knob + "=";
+      for (size_t at = 0; at < ref_case.size();) {
+        size_t end = ref_case.find("__", at);
+        if (end == std::string::npos) end = ref_case.size();
+        const std::string part = ref_case.substr(at, end - at);
+        if (part.rfind(key, 0) == 0) return normalise(knob, part.substr(key.size()));
+        at = end + 2;
+      }
+      return "";
+    };
+    std::vector<std::string> knobs;
+    if (j.contains("rows") && j["rows"].is_array())
+      for (const auto& row : j["rows"]) {
+        const std::string k = row.value("knob", std::string());
+        if (!k.empty() && std::find(knobs.begin(), knobs.end(), k) == knobs.end()) knobs.push_back(k);
+      }
+    std::vector<std::string> kept;
+    for (const auto& line : out) {
+      const std::string knob = line.substr(0, line.find('='));
+      const bool others_at_base = std::all_of(knobs.begin(), knobs.end(), [&](const std::string& k) {
+        return k == knob || scene_knob_value(scene, k) == base_value(k);
+      });
+      if (others_at_base) kept.push_back(line);
+    }
+    return kept;
   } catch (const std::exception&) {
     return {};
   }

@@ -229,6 +229,26 @@ TEST(Suggestions, SaysNothingWhenNothingQualifies) {
   EXPECT_TRUE(tradeoff_suggestions(tiny_named_scene(), "{not json").empty());
 }
 
+// The shipped measurement varied one knob at a time around the default scene: a run with
+// another knob moved (here the pin-jointed model) is not given what a knob did to the
+// default (sliding) scene, while the default scene itself is.
+TEST(Suggestions, OnlyWhereTheOtherKnobsAreAtTheMeasurementsBase) {
+  auto knobs_of = [](const std::vector<std::string>& lines) {
+    std::vector<std::string> k;
+    for (const auto& l : lines) k.push_back(l.substr(0, l.find('=')));
+    return k;
+  };
+  const auto base = knobs_of(shipped_tradeoff_suggestions(load_scene(default_scene_path(), {})));
+  ASSERT_FALSE(base.empty()) << "the shipped tradeoff suggests something for the default scene";
+  EXPECT_NE(std::find(base.begin(), base.end(), "fabric.far_yarns_per_element"), base.end());
+  const auto pin =
+      knobs_of(shipped_tradeoff_suggestions(load_scene(default_scene_path(), {"solver.model=pin_jointed"})));
+  for (const auto& k : pin) EXPECT_EQ(k, "solver.model") << "a pin-jointed run was told about " << k;
+  // With the time step moved, only the time step's own line can hold.
+  const auto dt = knobs_of(shipped_tradeoff_suggestions(load_scene(default_scene_path(), {"solver.dt_factor=0.7"})));
+  for (const auto& k : dt) EXPECT_EQ(k, "solver.dt_factor");
+}
+
 TEST(Suggestions, AddedToSummary) {
   const std::string dir = testing::scratch_dir();
   write_file_atomic(dir + "/summary.json", "{\n  \"status\": \"completed\"\n}\n");
