@@ -321,8 +321,26 @@ std::string joined_keys(const std::vector<std::string>& keys) {
   return s;
 }
 
-std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
-                                                        const std::vector<std::string>& varied_keys) {
+std::string column_unit(const std::string& column) {
+  static const std::pair<const char*, const char*> units[] = {{"_mps", "m/s"}, {"_mm", "mm"}, {"_J", "J"},
+                                                              {"_N", "N"},     {"_us", "us"}, {"_s", "s"}};
+  for (const auto& [suffix, unit] : units) {
+    const std::string s = suffix;
+    if (column.size() > s.size() && column.compare(column.size() - s.size(), s.size(), s) == 0) return unit;
+  }
+  return "";
+}
+
+std::string column_label(const std::string& column) {
+  std::string c = column;
+  const std::string unit = column_unit(column);
+  if (!unit.empty()) c = c.substr(0, c.rfind('_'));
+  std::replace(c.begin(), c.end(), '_', ' ');
+  return c;
+}
+
+std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, const std::vector<std::string>& varied_keys,
+                                                        const std::vector<std::string>& extra_y) {
   std::vector<std::pair<std::string, Chart>> out;
   if (varied_keys.empty() || results.rows.empty()) return out;
   const int xc = results.column(varied_keys[0]);
@@ -330,16 +348,19 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
   double tmp;
   for (const auto& r : results.rows)
     if (!parse_number(r[size_t(xc)], &tmp)) return out;  // not a numeric key: no x axis
-  const struct {
-    const char* column;
-    const char* label;
-    const char* unit;
-  } ys[] = {{"energy_absorbed_J", "energy absorbed", "J"}, {"residual_velocity_mps", "residual velocity", "m/s"}};
+  struct Y {
+    std::string column, label, unit;
+  };
+  std::vector<Y> ys = {{"energy_absorbed_J", "energy absorbed", "J"},
+                       {"residual_velocity_mps", "residual velocity", "m/s"}};
+  for (const auto& col : extra_y)
+    if (std::none_of(ys.begin(), ys.end(), [&](const Y& y) { return y.column == col; }))
+      ys.push_back({col, column_label(col), column_unit(col)});
   for (const auto& y : ys) {
     const int yc = results.column(y.column);
     if (yc < 0) continue;
     Chart c;
-    c.title = std::string(y.label) + " vs " + varied_keys[0];
+    c.title = y.label + " vs " + varied_keys[0];
     c.x = {varied_keys[0], ""};
     for (const auto& k : scene_keys())
       if (k.key == varied_keys[0]) c.x.unit = k.unit;
@@ -379,7 +400,7 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
       for (size_t i = 0; i < o.size(); ++i) t.x[i] = s.x[o[i]], t.y[i] = s.y[o[i]];
       s = t;
     }
-    out.emplace_back(std::string(y.column) + "_vs_" + varied_keys[0], c);
+    out.emplace_back(y.column + "_vs_" + varied_keys[0], c);
   }
   return out;
 }

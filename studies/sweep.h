@@ -157,11 +157,16 @@ struct Csv {
 };
 Csv parse_csv(const std::string& text);
 
-// Charts of a sweep's results.csv: energy absorbed and residual velocity against the
-// first varied key (when its values are numbers), one series per combination of the
-// other varied keys. Each chart's file stem is returned beside it.
-std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results,
-                                                        const std::vector<std::string>& varied_keys);
+// Charts of a sweep's results.csv: energy absorbed and residual velocity, then each of
+// `extra_y` (other columns of results.csv, `ravel sweep --chart-y`), against the first
+// varied key (when its values are numbers), one series per combination of the other varied
+// keys. Each chart's file stem is returned beside it.
+std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, const std::vector<std::string>& varied_keys,
+                                                        const std::vector<std::string>& extra_y = {});
+// The unit a results.csv column's name ends in ("energy_absorbed_J" -> "J", "_mps" -> "m/s";
+// "" for counts and ratios), and its words ("energy absorbed").
+std::string column_unit(const std::string& column);
+std::string column_label(const std::string& column);
 // The varied keys with x_key first, for sweep_charts (`ravel sweep --chart-x`, the app's x
 // axis): false, keys unchanged, when x_key is not among them.
 bool put_chart_x_first(std::vector<std::string>* keys, const std::string& x_key);

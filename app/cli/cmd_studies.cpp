@@ -106,6 +106,13 @@ int cmd_sweep(const Args& args) {
     if (a.flags.count("chart-x") && !studies::put_chart_x_first(&chart_keys, a.flags["chart-x"]))
       throw UsageError("--chart-x " + a.flags["chart-x"] + ": not a --vary key of this sweep (it varies " +
                        studies::joined_keys(keys) + ")");
+    std::vector<std::string> chart_y;
+    if (a.flags.count("chart-y")) {
+      std::stringstream ss(a.flags["chart-y"]);
+      for (std::string col; std::getline(ss, col, ',');)
+        if (!col.empty()) chart_y.push_back(col);
+      if (chart_y.empty()) throw UsageError("--chart-y: give one or more results.csv columns, comma-separated");
+    }
     const auto all = studies::expand_cases(vary);
     const auto mine = studies::shard_cases(all, opt.shard);
     const bool verbose = progress_wanted(a);
@@ -153,8 +160,13 @@ int cmd_sweep(const Args& args) {
                 rep.cases_per_hour);
     std::printf("  %s/results.csv\n", opt.out_dir.c_str());
     // Charts of what is finished so far (all shards), with their CSVs.
-    const auto charts =
-        studies::sweep_charts(studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv")), chart_keys);
+    const studies::Csv results = studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv"));
+    for (const auto& col : chart_y)
+      if (results.column(col) < 0)
+        throw UsageError("--chart-y " + col + ": no such column in " + opt.out_dir +
+                         "/results.csv (its runs are kept: rerun with a column it has, e.g. energy_absorbed_J, "
+                         "first_break_distance_mm, clamp_friction_J)");
+    const auto charts = studies::sweep_charts(results, chart_keys, chart_y);
     if (!charts.empty()) prepare_output_dir(opt.out_dir + "/charts");
     for (const auto& [stem, chart] : charts) {
       if (studies::finite_point_count(chart) == 0) continue;

@@ -95,6 +95,9 @@ std::vector<Command> make_table() {
         {"shard", "i/n", false, "only the cases k with k mod n = i - 1 (to split a sweep over machines)"},
         {"chart-x", "KEY", false,
          "the --vary key the charts put on the x axis (default: the first; the others make the series)"},
+        {"chart-y", "COLUMN,...", false,
+         "more results.csv columns to chart beside energy absorbed and residual velocity (e.g. "
+         "first_break_distance_mm,clamp_friction_J; rerun a finished sweep with it to chart it)"},
         {"no-extend", nullptr, false,
          "a run that reaches its end time undecided is not extended to solver.max_end_time_us"},
         {"restart", nullptr, false, "start over in a folder that holds another sweep's cases (they are removed)"},

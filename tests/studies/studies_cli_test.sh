@@ -69,6 +69,31 @@ grep -q "0 run, 6 already finished" "$WORK/chartx.out" || fail "chart-x rerun: $
 cx="$WORK/sweep/charts/residual_velocity_mps_vs_yarn.friction.csv"
 [[ -s $cx && -s ${cx%.csv}.png && -s ${cx%.csv}.svg ]] || fail "chart-x: no chart over yarn.friction: $(ls "$WORK/sweep/charts")"
 grep -c '^projectile.velocity_mps = ' "$cx" | grep -qx 6 || fail "chart-x: not 3 velocity series of 2 points: $(cat "$cx")"
+# --chart-y charts another results.csv column (its unit from its name), again running nothing;
+# a column results.csv lacks is refused by name, and the runs are kept.
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
+  --chart-y max_strain,friction_work_J --out "$WORK/sweep" >"$WORK/charty.out" 2>&1
+grep -q "0 run, 6 already finished" "$WORK/charty.out" || fail "chart-y rerun: $(cat "$WORK/charty.out")"
+cy="$WORK/sweep/charts/friction_work_J_vs_projectile.velocity_mps.csv"
+[[ -s $cy && -s ${cy%.csv}.png && -s $WORK/sweep/charts/max_strain_vs_projectile.velocity_mps.csv ]] ||
+  fail "chart-y: no charts: $(ls "$WORK/sweep/charts")"
+grep -q 'friction work (J)' "${cy%.csv}.svg" || fail "chart-y: the axis is not 'friction work (J)'"
+/usr/bin/python3 - "$cy" "$WORK/sweep/results.csv" <<'PY' || fail "chart-y: values differ from results.csv"
+import csv, sys
+chart = list(csv.reader(open(sys.argv[1])))[1:]
+rows = list(csv.DictReader(open(sys.argv[2])))
+want = {(float(r["projectile.velocity_mps"]), r["yarn.friction"]): float(r["friction_work_J"]) for r in rows}
+assert len(chart) == 6, chart
+for series, x, y in chart:
+    key = (float(x), series.split(" = ")[1])
+    assert abs(float(y) - want[key]) <= 1e-9 * max(1.0, abs(want[key])), (series, x, y, want[key])
+PY
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
+  --chart-y friction_wrk_J --out "$WORK/sweep" >"$WORK/charty_bad.out" 2>"$WORK/charty_bad.err"
+rc=$?
+[[ $rc == 2 ]] && grep -q -- "--chart-y friction_wrk_J: no such column" "$WORK/charty_bad.err" ||
+  fail "chart-y bad column: exit $rc, $(cat "$WORK/charty_bad.err")"
+[[ $(($(wc -l <"$WORK/sweep/results.csv") - 1)) == 6 ]] || fail "chart-y bad column: results.csv lost rows"
 
 # limit on the cheap scene: limit.json with the bracket, the fit and every run. First the
 # reference search (its progress lines count the runs still to make) ...
