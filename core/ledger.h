@@ -24,13 +24,14 @@ struct Ledger {
   double compression_J = 0;       // stored: the crossings' transverse compression (the law's integral)
   double compression_loss_J = 0;  // dissipated: work of the compression impulses beyond what the law stores
   double external_work_J = 0;     // work done on the system by external loads (tests, pull-out)
+  double clamp_friction_J = 0;    // dissipated by slipping clamps (fabric.clamp = slipping): grip x slide
 
   // Energy now held or dissipated, less what external loads put in: equals the initial
   // energy for an exact integration.
   double total() const {
     return projectile_ke_J + fabric_ke_J + strain_energy_J + viscous_J + damping_J + friction_work_J +
            projectile_friction_J + contact_loss_J + shift_work_J + released_J + stick_energy_J + compression_J +
-           compression_loss_J - external_work_J;
+           compression_loss_J + clamp_friction_J - external_work_J;
   }
   Ledger scaled(double f) const {
     Ledger l = *this;
@@ -48,6 +49,7 @@ struct Ledger {
     l.compression_J *= f;
     l.compression_loss_J *= f;
     l.external_work_J *= f;
+    l.clamp_friction_J *= f;
     return l;
   }
 };
@@ -70,6 +72,7 @@ struct EnergyBook {
   // Work of the corrections, cumulative (finish_step, release_held; sign: done on the system).
   double pfriction_cum = 0, contact_cum = 0, external_cum = 0;
   double shift_cum = 0;  // the position shifts' work against the yarn forces (shift_energy)
+  double clamp_cum = 0;  // slipping clamps: the grip's work, booked as dissipation (finish_step)
   // Yarn-yarn friction: its impulses' work and the stick springs' energy at t and t - dt.
   double friction_work_cum = 0, stick_end = 0, stick_prev = 0;
   // The compression law: its impulses' work and its stored energy at t and t - dt.
@@ -102,6 +105,7 @@ struct EnergyBook {
     l.friction_work_J = 0.0 - (friction_work_cum + l.stick_energy_J);  // (0.0 - : no negative zero)
     l.compression_loss_J = -compress_work_cum - l.compression_J;
     l.external_work_J = external_cum;
+    l.clamp_friction_J = clamp_cum;
     start();
   }
 };

@@ -345,6 +345,29 @@ Model build_model(const Scene& scene) {
   m.yarn_elem_offset.push_back(int(m.elem_a.size()));
   m.element_count = int(m.elem_a.size());
 
+  // ---- slipping clamps (docs/MODEL.md §7): each yarn end held by a clamp across the yarn
+  // slides along it against the grip, scaled like the yarn's cross-section (k real yarns when
+  // lumped, its graded weight, half on a symmetry plane). A node in two clamps (a corner of
+  // a ply clamped on adjacent edges) stays rigid.
+  if (f.clamp == ClampKind::slipping && m.clamped.any()) {
+    const double tol = 1e-6 * L0, ex = g.hx * L0, ey = g.hy * L0;
+    auto held = [&](int i, int ax) {
+      const double c = m.x0[size_t(i)][ax], e = ax == 0 ? ex : ey;
+      const bool lo = ax == 0 ? m.clamped.left : m.clamped.bottom, hi = ax == 0 ? m.clamped.right : m.clamped.top;
+      return (lo && c <= -e + tol) || (hi && c >= e - tol);
+    };
+    m.grip_of.assign(size_t(m.node_count), -1);
+    for (int yy = 0; yy < m.yarn_count(); ++yy) {
+      const int ax = m.yarn_family[yy] == warp ? 1 : 0;
+      const double grip = f.clamp_grip_n * m.elem_area[size_t(m.yarn_elem_offset[yy])] / y.area_m2;
+      for (const int i : {m.yarn_node(yy, 0), m.yarn_node(yy, m.yarn_size(yy) - 1)}) {
+        if (m.fixed[size_t(i)] != fix_all || !held(i, ax) || held(i, 1 - ax) || m.grip_of[size_t(i)] >= 0) continue;
+        m.grip_of[size_t(i)] = int(m.grips.size());
+        m.grips.push_back({i, ax, grip});
+      }
+    }
+  }
+
   // ---- crossings (sliding)
   const double D = 0.5 * f.thickness_m * k;
   if (sliding) {

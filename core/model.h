@@ -59,6 +59,17 @@ struct Model {
   std::vector<double> mass;         // kg (half / quarter on symmetry planes)
   std::vector<double> inv_mass;     // 1/kg, 0 for clamped nodes
   std::vector<std::uint8_t> fixed;  // FixedAxis bits
+  // Slipping clamps (fabric.clamp = slipping, docs/MODEL.md §7): a clamped yarn end that
+  // slides along its yarn, out of the clamp, against the clamp's Coulomb grip. It stays a
+  // clamped node for everything else (fixed = fix_all, inv_mass = 0: contacts, the
+  // projectile, the perforation test's anchors); only its own free update moves it, along
+  // `axis` (0 = x, 1 = y), and only while the pull exceeds `force` (N, the modelled yarn's).
+  struct Grip {
+    int node = 0, axis = 0;
+    double force = 0;
+  };
+  std::vector<Grip> grips;
+  std::vector<int> grip_of;  // per node: index into grips, -1 none (empty: no slipping clamp)
 
   // --- yarns: yarn y owns nodes yarn_nodes[yarn_offset[y] .. yarn_offset[y+1])
   int warp_count = 0, weft_count = 0;  // modelled yarns; warp ids first, then weft

@@ -93,7 +93,8 @@ std::vector<std::string> history_columns() {
           "yarn_contact_force_N",
           "nodes_on_projectile",
           "sliding_crossings",
-          "stuck_crossings"};
+          "stuck_crossings",
+          "clamp_friction_J"};
 }
 
 std::string history_csv(const std::vector<HistoryRow>& rows) {
@@ -134,7 +135,8 @@ std::string history_csv(const std::vector<HistoryRow>& rows) {
                            r.yarn_contact_force_N,
                            double(r.nodes_on_projectile),
                            double(r.sliding_crossings),
-                           double(r.stuck_crossings)};
+                           double(r.stuck_crossings),
+                           l.clamp_friction_J};
     for (size_t i = 0; i < std::size(vals); ++i) {
       if (i) out += ",";
       num(vals[i]);
@@ -200,6 +202,12 @@ std::string summary_json(const Summary& s, const Scene& scene) {
   j["decided_passing"] = s.decided_passing;
   j["energy_balance_error"] = s.energy_balance_error;
   j["friction_work_J"] = outcome(s.friction_work_J);
+  if (scene.fabric.clamp == ClampKind::slipping) {
+    j["clamp"] = "slipping";
+    j["clamp_grip_n"] = scene.fabric.clamp_grip_n;
+    j["clamp_friction_J"] = s.clamp_friction_J;
+    j["clamp_slip_max_mm"] = s.clamp_slip_max_m * 1e3;
+  }
   j["friction_work_to_first_break_J"] = outcome(s.friction_work_to_first_break_J);
   j["friction_work_to_perforation_J"] = outcome(s.friction_work_to_perforation_J);
   j["first_break_distance_mm"] = s.first_break_distance_m >= 0 && !undefined

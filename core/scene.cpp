@@ -56,6 +56,9 @@ const char* to_string(Weave w) {
 const char* to_string(CrossingCompression c) {
   return c == CrossingCompression::rigid ? "rigid" : "hyperbolic";
 }
+const char* to_string(ClampKind c) {
+  return c == ClampKind::rigid ? "rigid" : "slipping";
+}
 const char* to_string(ShapeKind s) {
   switch (s) {
     case ShapeKind::sphere:
@@ -207,6 +210,17 @@ std::vector<KeyDef> make_defs() {
     d.get_text = [](const Scene& s) { return s.fabric.clamped.to_string(); };
     defs.push_back(d);
   }
+  text_key(
+      defs, "fabric.clamp",
+      "rigid (the paper: a clamped yarn end never moves) or slipping (it slides out of the clamp along its yarn "
+      "once the yarn pulls harder than fabric.clamp_grip_n; a test rig's clamp, docs/MODEL.md §7)",
+      {"rigid", "slipping"},
+      [](Scene& s, const std::string& v) { s.fabric.clamp = v == "rigid" ? ClampKind::rigid : ClampKind::slipping; },
+      [](const Scene& s) { return std::string(to_string(s.fabric.clamp)); });
+  NUM("fabric.clamp_grip_n", "N",
+      "slipping clamp: pull on one real yarn at which it slides through the clamp (Coulomb friction of the clamp "
+      "faces; about 10-300 N for bolted or pneumatic clamps, above the yarn's break load ~290 N it never slips)",
+      1, 0, true, inf, fabric.clamp_grip_n);
   text_key(
       defs, "fabric.crossing_compression",
       "rigid (crossing yarns keep their centre distance D under any load, the paper read literally) or "

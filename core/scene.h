@@ -20,6 +20,10 @@ enum class Precision { double_precision, single_precision };
 enum class ShapeKind { sphere, cylinder, cone };
 // How a crossing's centre distance responds to its normal force (docs/MODEL.md §4).
 enum class CrossingCompression { rigid, hyperbolic };
+// How a clamp holds the yarns that end in it (docs/MODEL.md §7): rigid (the paper: the end
+// node never moves) or slipping (the end node slides along its yarn, out of the clamp, once
+// the yarn's pull exceeds the clamp's grip: Coulomb friction of the clamp faces).
+enum class ClampKind { rigid, slipping };
 
 // Which fabric edges are clamped. "left"/"right" are the edges x = -W/2 and x = +W/2
 // (they hold the weft yarns, which run along x); "bottom"/"top" are y = -L/2, +L/2
@@ -39,6 +43,10 @@ struct FabricParams {
   double node_mass_kg = 9.4e-8;    // m (paper: 9.4e-5 g)
   double thickness_m = 0.40e-3;    // fabric thickness; contact diameter D = thickness / 2
   ClampedEdges clamped;
+  ClampKind clamp = ClampKind::rigid;  // the paper's rigid clamp, or one the yarns slip through
+  // Slipping clamp: the pull along a real yarn at which it slides through the clamp faces
+  // (Coulomb: 2 mu_c p w d for clamp pressure p on a yarn of width w over a depth d).
+  double clamp_grip_n = 50.0;
   int yarns_per_element = 1;  // k real yarns lumped into one modelled yarn
   // Graded lumping (docs/MODEL.md §1): every real yarn within full_resolution_m of the
   // strike point is modelled; beyond it, one modelled yarn stands for far_yarns_per_element.
@@ -180,5 +188,6 @@ const char* to_string(Material m);
 const char* to_string(Weave w);
 const char* to_string(ShapeKind s);
 const char* to_string(CrossingCompression c);
+const char* to_string(ClampKind c);
 
 }  // namespace ravel

@@ -673,6 +673,10 @@ Summary Simulation::summary() const {
   s.perforation_time_s = I.perforation_time;
   s.energy_balance_error = I.worst_balance;
   s.friction_work_J = I.solver->ledger().friction_work_J * m.symmetry_factor;
+  s.clamp_friction_J = I.solver->ledger().clamp_friction_J * m.symmetry_factor;
+  for (const auto& g : m.grips)
+    s.clamp_slip_max_m =
+        std::max(s.clamp_slip_max_m, std::abs(I.solver->position(g.node)[g.axis] - m.x0[size_t(g.node)][g.axis]));
   s.first_break_time_s = I.first_break_time;
   s.friction_work_to_first_break_J =
       I.first_break_time >= 0 ? I.friction_at_first_break * m.symmetry_factor : s.friction_work_J;

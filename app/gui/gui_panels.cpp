@@ -206,6 +206,20 @@ bool scene_section(GuiApp& app) {
     changed |= ImGui::Checkbox("top", &s.fabric.clamped.top);
     ImGui::EndTable();
   }
+  int grip = s.fabric.clamp == ClampKind::rigid ? 0 : 1;
+  if (ImGui::Combo("clamp", &grip, "rigid (paper)\0slips at a grip\0")) {
+    s.fabric.clamp = grip == 0 ? ClampKind::rigid : ClampKind::slipping;
+    changed = true;
+  }
+  help_marker(
+      "Rigid: a clamped yarn end never moves (the paper). Slips at a grip: it slides out of the clamp once its yarn "
+      "pulls harder than the grip, as in a test rig's clamp (fabric.clamp, docs/MODEL.md section 7).");
+  ImGui::BeginDisabled(s.fabric.clamp == ClampKind::rigid);
+  changed |= slider_si("grip (N/yarn)", &s.fabric.clamp_grip_n, 1, 10, 300, "%.0f");
+  help_marker(
+      "Pull on one yarn at which it slides through the clamp (fabric.clamp_grip_n); the yarn breaks at about "
+      "290 N, so a grip above that never slips.");
+  ImGui::EndDisabled();
   changed |= slider_si("failure strain (%)", &s.yarn.failure_strain, 100, 1.0, 10.0, "%.2f");
   int mat = s.yarn.material == Material::zener ? 0 : 1;
   if (ImGui::Combo("material", &mat, "Zener (viscoelastic)\0linear elastic\0")) {
@@ -725,6 +739,9 @@ double e_contact(const HistoryRow& r) {
 double e_released(const HistoryRow& r) {
   return r.ledger.released_J;
 }
+double e_clamp(const HistoryRow& r) {
+  return r.ledger.clamp_friction_J;
+}
 }  // namespace
 
 void draw_charts_panel(GuiApp& app) {
@@ -791,6 +808,8 @@ void draw_charts_panel(GuiApp& app) {
                {"projectile friction", IM_COL32(200, 150, 100, 255), e_pfric},
                {"contact loss", IM_COL32(170, 170, 170, 255), e_contact},
                {"released (broken)", IM_COL32(255, 110, 160, 255), e_released}};
+  if (v.scene.fabric.clamp == ClampKind::slipping)  // (shown only when there is one)
+    en.series.push_back({"clamp friction", IM_COL32(80, 220, 220, 255), e_clamp});
   en.cursor_s = cursor;
   const double clicked_en = draw_chart(en, ImVec2(ew, avail.y));
   if (clicked < 0) clicked = clicked_en;
@@ -852,6 +871,8 @@ void draw_status_panel(GuiApp& app) {
         "over the run",
         s.friction_work_to_first_break_J, s.first_break_time_s >= 0 ? "" : " (none yet)",
         s.friction_work_to_perforation_J, s.perforated ? "" : " (not perforated)", s.friction_work_J);
+  if (v.scene.fabric.clamp == ClampKind::slipping)
+    ImGui::Text("clamps %.2f J, slid up to %.1f mm", s.clamp_friction_J, s.clamp_slip_max_m * 1e3);
   if (s.first_break_time_s >= 0)
     ImGui::Text("first break %.1f \xC2\xB5s, %.1f mm from impact", s.first_break_time_s * 1e6,
                 s.first_break_distance_m * 1e3);

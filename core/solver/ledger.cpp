@@ -143,6 +143,11 @@ void Book<Real>::finish_step() {
     s_.dv_pfriction[i].setZero();
   }
   s_.ptouch_list.clear();
+  // Slipping clamps: the grip's velocity change is a correction like the others.
+  for (size_t g = 0; g < model_.grips.size(); ++g) {
+    const int i = model_.grips[g].node, ax = model_.grips[g].axis;
+    s_.book.clamp_cum -= 0.5 * model_.mass[i] * double(s_.grip_dv[g]) * double(s_.v_prev[i][ax] + s_.v[i][ax]);
+  }
   // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
   for (const auto& [i, F] : s_.f_ext)
     s_.book.external_cum += 0.5 * double(model_.dt) * double(F.dot(s_.v_prev[i] + s_.v[i]));

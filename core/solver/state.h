@@ -72,6 +72,7 @@ struct State {
   };
   std::vector<Corrections> corr;
   std::vector<V3> dv_pfriction;  // the projectile's friction (only the nodes it touched: ptouch_list)
+  std::vector<Real> grip_dv;     // per slipping-clamp node (Model::grips): this step's velocity change by the grip
   // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
   EnergyBook book;
   // (per crossing, in CrossingState below: comp_u, the compression law's stored energy, and
