@@ -72,7 +72,9 @@ struct EnergyBook {
   // Work of the corrections, cumulative (finish_step, release_held; sign: done on the system).
   double pfriction_cum = 0, contact_cum = 0, external_cum = 0;
   double shift_cum = 0;  // the position shifts' work against the yarn forces (shift_energy)
-  double clamp_cum = 0;  // slipping clamps: the grip's work, booked as dissipation (finish_step)
+  // Slipping clamps: the energy the yarn fed from a clamp took out of its element, at t and
+  // t - dt (internal_forces).
+  double clamp_cum = 0, clamp_prev = 0;
   // Yarn-yarn friction: its impulses' work and the stick springs' energy at t and t - dt.
   double friction_work_cum = 0, stick_end = 0, stick_prev = 0;
   // The compression law: its impulses' work and its stored energy at t and t - dt.
@@ -85,6 +87,7 @@ struct EnergyBook {
     stored_prev = stored_now;
     viscous_prev = viscous_cum;
     released_prev = released_cum;
+    clamp_prev = clamp_cum;
   }
   // The ledger row at t - dt/2, then this step's values become the previous ones.
   void close_row(Ledger& l) {
@@ -105,7 +108,7 @@ struct EnergyBook {
     l.friction_work_J = 0.0 - (friction_work_cum + l.stick_energy_J);  // (0.0 - : no negative zero)
     l.compression_loss_J = -compress_work_cum - l.compression_J;
     l.external_work_J = external_cum;
-    l.clamp_friction_J = clamp_cum;
+    l.clamp_friction_J = 0.5 * (clamp_prev + clamp_cum);
     start();
   }
 };

@@ -346,7 +346,7 @@ Model build_model(const Scene& scene) {
   m.element_count = int(m.elem_a.size());
 
   // ---- slipping clamps (docs/MODEL.md §7): each yarn end held by a clamp across the yarn
-  // slides along it against the grip, scaled like the yarn's cross-section (k real yarns when
+  // is fed from the clamp against the grip, scaled like the yarn's cross-section (k real yarns when
   // lumped, its graded weight, half on a symmetry plane). A node in two clamps (a corner of
   // a ply clamped on adjacent edges) stays rigid.
   if (f.clamp == ClampKind::slipping && m.clamped.any()) {
@@ -356,14 +356,16 @@ Model build_model(const Scene& scene) {
       const bool lo = ax == 0 ? m.clamped.left : m.clamped.bottom, hi = ax == 0 ? m.clamped.right : m.clamped.top;
       return (lo && c <= -e + tol) || (hi && c >= e - tol);
     };
-    m.grip_of.assign(size_t(m.node_count), -1);
+    m.grip_of_elem.assign(size_t(m.element_count), -1);
+    m.clamp_depth = f.clamp_depth_m;
     for (int yy = 0; yy < m.yarn_count(); ++yy) {
-      const int ax = m.yarn_family[yy] == warp ? 1 : 0;
-      const double grip = f.clamp_grip_n * m.elem_area[size_t(m.yarn_elem_offset[yy])] / y.area_m2;
-      for (const int i : {m.yarn_node(yy, 0), m.yarn_node(yy, m.yarn_size(yy) - 1)}) {
-        if (m.fixed[size_t(i)] != fix_all || !held(i, ax) || held(i, 1 - ax) || m.grip_of[size_t(i)] >= 0) continue;
-        m.grip_of[size_t(i)] = int(m.grips.size());
-        m.grips.push_back({i, ax, grip});
+      const int ax = m.yarn_family[yy] == warp ? 1 : 0, n = m.yarn_size(yy), e0 = m.yarn_elem_offset[yy];
+      if (n < 2) continue;
+      const double grip = f.clamp_grip_n * m.elem_area[size_t(e0)] / y.area_m2;
+      for (const auto& [i, e] : {std::pair{m.yarn_node(yy, 0), e0}, std::pair{m.yarn_node(yy, n - 1), e0 + n - 2}}) {
+        if (m.fixed[size_t(i)] != fix_all || !held(i, ax) || held(i, 1 - ax)) continue;
+        m.grip_of_elem[size_t(e)] = int(m.grips.size());
+        m.grips.push_back({e, i, grip});
       }
     }
   }

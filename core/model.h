@@ -59,17 +59,17 @@ struct Model {
   std::vector<double> mass;         // kg (half / quarter on symmetry planes)
   std::vector<double> inv_mass;     // 1/kg, 0 for clamped nodes
   std::vector<std::uint8_t> fixed;  // FixedAxis bits
-  // Slipping clamps (fabric.clamp = slipping, docs/MODEL.md §7): a clamped yarn end that
-  // slides along its yarn, out of the clamp, against the clamp's Coulomb grip. It stays a
-  // clamped node for everything else (fixed = fix_all, inv_mass = 0: contacts, the
-  // projectile, the perforation test's anchors); only its own free update moves it, along
-  // `axis` (0 = x, 1 = y), and only while the pull exceeds `force` (N, the modelled yarn's).
+  // Slipping clamps (fabric.clamp = slipping, docs/MODEL.md §7): the clamp feeds yarn into
+  // the element that ends in it (`element`, its clamped end `node` stays where it is) while
+  // the element pulls harder than the grip `force` (N, the modelled yarn's): the element's
+  // rest length grows by the yarn paid out (State::grip_payout), a rigid-plastic slider.
   struct Grip {
-    int node = 0, axis = 0;
+    int element = 0, node = 0;
     double force = 0;
   };
   std::vector<Grip> grips;
-  std::vector<int> grip_of;  // per node: index into grips, -1 none (empty: no slipping clamp)
+  double clamp_depth = 0;         // m: yarn a clamp can feed before the yarn has left it
+  std::vector<int> grip_of_elem;  // per element: index into grips, -1 none (empty: no slipping clamp)
 
   // --- yarns: yarn y owns nodes yarn_nodes[yarn_offset[y] .. yarn_offset[y+1])
   int warp_count = 0, weft_count = 0;  // modelled yarns; warp ids first, then weft

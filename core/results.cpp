@@ -206,7 +206,9 @@ std::string summary_json(const Summary& s, const Scene& scene) {
     j["clamp"] = "slipping";
     j["clamp_grip_n"] = scene.fabric.clamp_grip_n;
     j["clamp_friction_J"] = s.clamp_friction_J;
+    j["clamp_depth_mm"] = scene.fabric.clamp_depth_m * 1e3;
     j["clamp_slip_max_mm"] = s.clamp_slip_max_m * 1e3;
+    j["clamp_pulled_out_yarns"] = int(std::lround(s.clamp_pulled_out));
   }
   j["friction_work_to_first_break_J"] = outcome(s.friction_work_to_first_break_J);
   j["friction_work_to_perforation_J"] = outcome(s.friction_work_to_perforation_J);

@@ -221,6 +221,10 @@ std::vector<KeyDef> make_defs() {
       "slipping clamp: pull on one real yarn at which it slides through the clamp (Coulomb friction of the clamp "
       "faces; about 10-300 N for bolted or pneumatic clamps, above the yarn's break load ~290 N it never slips)",
       1, 0, true, inf, fabric.clamp_grip_n);
+  NUM("fabric.clamp_depth_mm", "mm",
+      "slipping clamp: the length of yarn the clamp holds (its jaws' width, about 10-50 mm); once that much has "
+      "been fed out the yarn has left the clamp and pulls on nothing",
+      1e-3, 0, true, inf, fabric.clamp_depth_m);
   text_key(
       defs, "fabric.crossing_compression",
       "rigid (crossing yarns keep their centre distance D under any load, the paper read literally) or "

@@ -47,7 +47,8 @@ struct FabricParams {
   // Slipping clamp: the pull along a real yarn at which it slides through the clamp faces
   // (Coulomb: 2 mu_c p w d for clamp pressure p on a yarn of width w over a depth d).
   double clamp_grip_n = 50.0;
-  int yarns_per_element = 1;  // k real yarns lumped into one modelled yarn
+  double clamp_depth_m = 25.0e-3;  // yarn held in the clamp: fed out past it, the yarn is free
+  int yarns_per_element = 1;       // k real yarns lumped into one modelled yarn
   // Graded lumping (docs/MODEL.md §1): every real yarn within full_resolution_m of the
   // strike point is modelled; beyond it, one modelled yarn stands for far_yarns_per_element.
   int far_yarns_per_element = 1;        // 1 = no grading

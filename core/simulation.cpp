@@ -295,8 +295,13 @@ struct Simulation::Impl {
       return a;
     };
     auto join = [&](int a, int b) { parent[find(a)] = find(b); };
+    // (A yarn a slipping clamp has fed out to its depth has left the clamp: it holds by nothing.)
+    auto left_clamp = [&](int e) {
+      return !m.grip_of_elem.empty() && m.grip_of_elem[e] >= 0 &&
+             solver->grip_payout(m.grip_of_elem[e]) >= m.clamp_depth;
+    };
     for (int e = 0; e < m.element_count; ++e)
-      if (!solver->broken(e)) join(m.elem_a[e], m.elem_b[e]);
+      if (!solver->broken(e) && !left_clamp(e)) join(m.elem_a[e], m.elem_b[e]);
     for (int c = 0; c < int(m.crossings.size()) && through_crossings; ++c) {
       if (!solver->crossing_active(c) || solver->crossing_gap(c) > m.crossings[c].contact_distance) continue;
       const auto& cr = m.crossings[c];
@@ -674,9 +679,13 @@ Summary Simulation::summary() const {
   s.energy_balance_error = I.worst_balance;
   s.friction_work_J = I.solver->ledger().friction_work_J * m.symmetry_factor;
   s.clamp_friction_J = I.solver->ledger().clamp_friction_J * m.symmetry_factor;
-  for (const auto& g : m.grips)
-    s.clamp_slip_max_m =
-        std::max(s.clamp_slip_max_m, std::abs(I.solver->position(g.node)[g.axis] - m.x0[size_t(g.node)][g.axis]));
+  for (size_t g = 0; g < m.grips.size(); ++g) {
+    const double fed = I.solver->grip_payout(int(g));
+    s.clamp_slip_max_m = std::max(s.clamp_slip_max_m, std::min(fed, m.clamp_depth));
+    // real yarns: a clamp's grip is the scene's per yarn times the yarns it holds (k when
+    // lumped, half a yarn on a symmetry plane)
+    if (fed >= m.clamp_depth) s.clamp_pulled_out += m.symmetry_factor * m.grips[g].force / I.scene.fabric.clamp_grip_n;
+  }
   s.first_break_time_s = I.first_break_time;
   s.friction_work_to_first_break_J =
       I.first_break_time >= 0 ? I.friction_at_first_break * m.symmetry_factor : s.friction_work_J;

@@ -59,7 +59,8 @@ struct Summary {
   double energy_balance_error = 0;  // worst |balance error| over the run
   double friction_work_J = 0;       // yarn-yarn friction work over the whole run
   double clamp_friction_J = 0;      // slipping clamps' dissipation over the whole run (0: rigid clamps)
-  double clamp_slip_max_m = 0;      // slipping clamps: the furthest a yarn end slid out of its clamp
+  double clamp_slip_max_m = 0;      // slipping clamps: the most yarn one clamp fed out (it only grows)
+  double clamp_pulled_out = 0;      // ... and the yarns pulled out of their clamps (whole fabric)
   // ... up to the first broken element (the whole run if none broke) and up to perforation
   // (the whole run if it did not perforate): the windows of docs/MODEL.md §8.
   double friction_work_to_first_break_J = 0;

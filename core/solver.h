@@ -157,6 +157,8 @@ class Solver {
   virtual void set_external_force(int node, const Vec3d& f) = 0;
   // Element state.
   virtual double strain(int e) const = 0;
+  // Yarn a slipping clamp (Model::grips[g]) has fed into its element so far, m.
+  virtual double grip_payout(int g) const = 0;
   virtual double stress(int e) const = 0;
   virtual bool broken(int e) const = 0;
   // Crossing state.

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -109,8 +110,10 @@ int cmd_sweep(const Args& args) {
     std::vector<std::string> chart_y;
     if (a.flags.count("chart-y")) {
       std::stringstream ss(a.flags["chart-y"]);
-      for (std::string col; std::getline(ss, col, ',');)
+      for (std::string col; std::getline(ss, col, ',');) {
+        col.erase(std::remove_if(col.begin(), col.end(), ::isspace), col.end());  // "a, b" as "a,b"
         if (!col.empty()) chart_y.push_back(col);
+      }
       if (chart_y.empty()) throw UsageError("--chart-y: give one or more results.csv columns, comma-separated");
     }
     const auto all = studies::expand_cases(vary);
@@ -162,14 +165,17 @@ int cmd_sweep(const Args& args) {
     // Charts of what is finished so far (all shards), with their CSVs.
     const studies::Csv results = studies::parse_csv(studies::read_text_file(opt.out_dir + "/results.csv"));
     for (const auto& col : chart_y)
-      if (results.column(col) < 0)
+      if (!results.rows.empty() && results.column(col) < 0)  // (no finished case yet: nothing to chart)
         throw UsageError("--chart-y " + col + ": no such column in " + opt.out_dir +
                          "/results.csv (its runs are kept: rerun with a column it has, e.g. energy_absorbed_J, "
                          "first_break_distance_mm, clamp_friction_J)");
     const auto charts = studies::sweep_charts(results, chart_keys, chart_y);
     if (!charts.empty()) prepare_output_dir(opt.out_dir + "/charts");
     for (const auto& [stem, chart] : charts) {
-      if (studies::finite_point_count(chart) == 0) continue;
+      if (studies::finite_point_count(chart) == 0) {
+        std::printf("  (no chart of %s: no numbers in it yet)\n", stem.c_str());
+        continue;
+      }
       studies::write_chart(chart, opt.out_dir + "/charts/" + stem);
       std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
     }

@@ -212,13 +212,15 @@ bool scene_section(GuiApp& app) {
     changed = true;
   }
   help_marker(
-      "Rigid: a clamped yarn end never moves (the paper). Slips at a grip: it slides out of the clamp once its yarn "
+      "Rigid: a clamped yarn end never moves (the paper). Slips at a grip: the clamp feeds yarn out once the yarn "
       "pulls harder than the grip, as in a test rig's clamp (fabric.clamp, docs/MODEL.md section 7).");
   ImGui::BeginDisabled(s.fabric.clamp == ClampKind::rigid);
   changed |= slider_si("grip (N/yarn)", &s.fabric.clamp_grip_n, 1, 10, 300, "%.0f");
   help_marker(
       "Pull on one yarn at which it slides through the clamp (fabric.clamp_grip_n); the yarn breaks at about "
       "290 N, so a grip above that never slips.");
+  changed |= slider_si("depth (mm)", &s.fabric.clamp_depth_m, 1e3, 5, 60, "%.0f");
+  help_marker("Yarn the clamp holds (fabric.clamp_depth_mm): fed out past it, the yarn has left the clamp.");
   ImGui::EndDisabled();
   changed |= slider_si("failure strain (%)", &s.yarn.failure_strain, 100, 1.0, 10.0, "%.2f");
   int mat = s.yarn.material == Material::zener ? 0 : 1;
@@ -872,7 +874,8 @@ void draw_status_panel(GuiApp& app) {
         s.friction_work_to_first_break_J, s.first_break_time_s >= 0 ? "" : " (none yet)",
         s.friction_work_to_perforation_J, s.perforated ? "" : " (not perforated)", s.friction_work_J);
   if (v.scene.fabric.clamp == ClampKind::slipping)
-    ImGui::Text("clamps %.2f J, slid up to %.1f mm", s.clamp_friction_J, s.clamp_slip_max_m * 1e3);
+    ImGui::Text("clamps %.2f J, fed up to %.1f mm%s", s.clamp_friction_J, s.clamp_slip_max_m * 1e3,
+                s.clamp_pulled_out > 0 ? ", yarns pulled out" : "");
   if (s.first_break_time_s >= 0)
     ImGui::Text("first break %.1f \xC2\xB5s, %.1f mm from impact", s.first_break_time_s * 1e6,
                 s.first_break_distance_m * 1e3);

@@ -23,6 +23,13 @@ struct InternalForces {
 
   bool element_one(int e, bool zener, double E, double fail, bool breakable, double& stored, double& diss,
                    double& released, double& max_strain, double& damp);
+  // The element law at rest length `rest`, the state untouched: the pull along the element
+  // (N) and the energy its step would store and dissipate (J). The slipping clamp's slider.
+  struct LawAt {
+    double force, stored, dissipated;
+  };
+  LawAt law_at(int e, Real len, double rest, double rest_was, bool zener, double E) const;
+  double feed_from_clamp(int e, Real len, bool zener, double E);
   void run();
   bool broken_by_shift(int e) const;
 };
@@ -36,9 +43,63 @@ template <class Real>
 bool InternalForces<Real>::broken_by_shift(int e) const {
   const int a = model_.elem_a[e], b = model_.elem_b[e];
   const V3 dx0 = (s_.x[b] - s_.corr[b].dx_contact) - (s_.x[a] - s_.corr[a].dx_contact);
-  Real eps = dx0.norm() / Real(model_.elem_rest[e]) - Real(1), mat = eps, dg = Real(1);
+  Real eps = dx0.norm() / Real(elem_rest_now(model_, s_, e)) - Real(1), mat = eps, dg = Real(1);
   if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
   return double(eps) < kShiftBreakShare * model_.failure_strain;
+}
+
+template <class Real>
+typename InternalForces<Real>::LawAt InternalForces<Real>::law_at(int e, Real len, double rest, double rest_was,
+                                                                  bool zener, double E) const {
+  Real eps = len / Real(rest) - Real(1), mat = eps, dg = Real(1);
+  if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
+  const double vol = model_.elem_area[e] * rest;
+  // The yarn fed in comes out of the clamp unstrained: the element's internal and previous
+  // strains are its old material's, spread over the longer rest length.
+  const double dilute = rest_was / rest;
+  if (zener) {
+    const ZenerStep zs = ctx_.zener.step(double(s_.prev_strain[e]) * dilute, double(mat), double(s_.ev[e]) * dilute);
+    return {zs.stress * double(dg) * model_.elem_area[e], zener_stored(ctx_.zener.c, zs.stress, zs.ev) * vol,
+            zs.dissipated * vol};
+  }
+  const double sig = mat > 0 ? E * double(mat) : 0.0;
+  return {sig * double(dg) * model_.elem_area[e], sig * sig / (2 * E) * vol, 0.0};
+}
+
+// A slipping clamp (docs/MODEL.md §7) feeds yarn into its element while the element pulls
+// harder than the grip: a rigid-plastic slider in series with the element, so the rest
+// length grows until the pull is the grip (bisection: the pull falls as the rest length
+// grows, and is none at the element's present length). The clamp's friction is what the
+// element took in this step and does not hold: the work its nodes did on it, in the
+// leapfrog's measure (the mean of last step's pull and this step's, the grip, over its
+// stretch), less what it now stores and dissipates. (The energy of the overstretched element
+// less that of the fed one would also book the stretch past the grip the nodes never felt,
+// 9 % too much on a single yarn at the default step, first order in dt.) Returns the
+// element's rest length for this step.
+template <class Real>
+double InternalForces<Real>::feed_from_clamp(int e, Real len, bool zener, double E) {
+  const int g = model_.grip_of_elem[e];
+  s_.grip_heat[size_t(g)] = 0;
+  // Fed out past the clamp's depth, the yarn has left the clamp: no grip holds it.
+  const double fed_out = s_.grip_payout[size_t(g)], rest = model_.elem_rest[e] + fed_out;
+  const double grip = fed_out < model_.clamp_depth ? model_.grips[size_t(g)].force : 0.0;
+  const LawAt held = law_at(e, len, rest, rest, zener, E);
+  if (held.force <= grip || double(len) <= rest) return rest;
+  double lo = rest, hi = double(len);
+  for (int it = 0; it < 64 && hi - lo > 1e-14 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (law_at(e, len, mid, rest, zener, E).force > grip ? lo : hi) = mid;
+  }
+  const LawAt fed = law_at(e, len, hi, rest, zener, E);
+  const double len_was = rest * (1 + double(s_.strain[e])) * (1 + model_.crimp_strain);
+  const double pull_was = double(s_.elem_force[e].norm());
+  s_.grip_heat[size_t(g)] =
+      0.5 * (pull_was + fed.force) * (double(len) - len_was) - (fed.stored + fed.dissipated - s_.elem_energy[e]);
+  s_.grip_payout[size_t(g)] = hi - model_.elem_rest[e];
+  const Real dilute = Real(rest / hi);
+  s_.ev[e] *= dilute;
+  s_.prev_strain[e] *= dilute;
+  return hi;
 }
 
 // One element's strain, stress update, failure and force (the one-element code the lanes mirror).
@@ -52,7 +113,8 @@ inline bool InternalForces<Real>::element_one(int e, bool zener, double E, doubl
   }
   const V3 dx = s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]];
   const Real len = dx.norm();
-  const double rest = model_.elem_rest[e];
+  const double rest = model_.grip_of_elem.empty() || model_.grip_of_elem[e] < 0 ? model_.elem_rest[e]
+                                                                                : feed_from_clamp(e, len, zener, E);
   Real eps = len / Real(rest) - Real(1);
   const double vol = model_.elem_area[e] * rest;
   // The yarn law's strain (the crimp stage's material strain for the pin-jointed model),
@@ -142,6 +204,7 @@ void InternalForces<Real>::run() {
   const bool breakable = model_.breakable;
   double stored = 0, diss = 0, released = 0, max_strain = 0, damp = 0;
   int newly_broken[2] = {0, 0}, nbroke = 0;
+  const bool gripped = !model_.grip_of_elem.empty();
   // Elements in groups of four: intact groups of a Zener yarn in which nothing fails go
   // through the lanes (the same numbers; element_lanes.h), the rest one at a time. Sums are
   // taken in element order either way.
@@ -153,7 +216,7 @@ void InternalForces<Real>::run() {
     const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
     if constexpr (std::is_same_v<Real, double>) {
       bool intact = use_lanes && e1 - e0 == kBatch;
-      for (int e = e0; e < e1 && intact; ++e) intact = !s_.broken_flag[e];
+      for (int e = e0; e < e1 && intact; ++e) intact = !s_.broken_flag[e] && !(gripped && model_.grip_of_elem[e] >= 0);
       if (intact) {
         lanes::ElementBatch b;
         b.x = s_.x[0].data();
@@ -308,6 +371,7 @@ void InternalForces<Real>::run() {
   s_.book.stored_now = stored + bend_stored;
   s_.book.damping_cum += damp;
   s_.book.viscous_cum += diss;
+  for (double& h : s_.grip_heat) s_.book.clamp_cum += std::exchange(h, 0.0);  // (in clamp order: any thread count)
   s_.book.released_cum += released + bend_released;
   run_.max_strain = max_strain;
 }

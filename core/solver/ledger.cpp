@@ -99,7 +99,7 @@ RAVEL_INLINE double Book<Real>::shift_energy() {
 // An element's stored energy at length len with its current internal strain.
 template <class Real>
 inline double Book<Real>::element_energy_at(int e, Real len) const {
-  const double rest = model_.elem_rest[e], vol = model_.elem_area[e] * rest;
+  const double rest = elem_rest_now(model_, s_, e), vol = model_.elem_area[e] * rest;
   Real eps = len / Real(rest) - Real(1), mat = eps, dg = Real(1);
   if (model_.crimp_strain > 0) crimp_stage(model_, eps, mat, dg);
   if (model_.material == Material::zener) {
@@ -143,11 +143,6 @@ void Book<Real>::finish_step() {
     s_.dv_pfriction[i].setZero();
   }
   s_.ptouch_list.clear();
-  // Slipping clamps: the grip's velocity change is a correction like the others.
-  for (size_t g = 0; g < model_.grips.size(); ++g) {
-    const int i = model_.grips[g].node, ax = model_.grips[g].axis;
-    s_.book.clamp_cum -= 0.5 * model_.mass[i] * double(s_.grip_dv[g]) * double(s_.v_prev[i][ax] + s_.v[i][ax]);
-  }
   // External loads: F . (dx(t - dt/2) + dx(t + dt/2)) / 2.
   for (const auto& [i, F] : s_.f_ext)
     s_.book.external_cum += 0.5 * double(model_.dt) * double(F.dot(s_.v_prev[i] + s_.v[i]));

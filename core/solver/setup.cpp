@@ -15,7 +15,8 @@ State<Real> initial_state(const Model& model, const Context<Real>& ctx, RunState
   s.v_prev.assign(n, V3::Zero());
   s.corr.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});
   s.dv_pfriction.assign(n, V3::Zero());
-  s.grip_dv.assign(model.grips.size(), Real(0));
+  s.grip_payout.assign(model.grips.size(), 0.0);
+  s.grip_heat.assign(model.grips.size(), 0.0);
   s.held_n.assign(n, V3::Zero());
   s.held_flag.assign(n, 0);
   s.pass_sum.assign(n, {V3::Zero(), V3::Zero(), V3::Zero(), V3::Zero()});

@@ -100,6 +100,9 @@ class SolverT final : public Solver {
   double strain(int e) const override {
     return double(s_.strain[e]);
   }
+  double grip_payout(int g) const override {
+    return s_.grip_payout[size_t(g)];
+  }
   double stress(int e) const override {
     return double(s_.stress[e]);
   }

@@ -196,21 +196,11 @@ void internal_forces(const Model& model, State<Real>& s, RunState& run, Context<
 template <class Real>
 void close_ledger_row(const Model& model, State<Real>& s, RunState& run, double max_balance_error);
 
-// Eq 1-2 for a slipping clamp's node i (Model::grips): along its yarn, the pull f less the
-// clamp's Coulomb grip (up to `force`; none while it holds, v = 0), across it held; the grip's
-// velocity change is kept for the ledger (finish_step). Returns |x|^2.
+// Element e's rest length now: the model's, plus the yarn a slipping clamp has fed into it.
 template <class Real>
-inline double grip_update(const Model& model, State<Real>& s, int i, const Eigen::Matrix<Real, 3, 1>& f) {
-  const int g = model.grip_of[i];
-  const int ax = model.grips[g].axis;
-  const Real dt = Real(model.dt), m = Real(model.mass[i]);
-  const Real p = m * s.v[i][ax] + dt * f[ax];  // momentum after the pull alone
-  const Real cap = dt * Real(model.grips[g].force);
-  const Real p_new = std::abs(p) <= cap ? Real(0) : p - std::copysign(cap, p);
-  s.grip_dv[g] = (p_new - p) / m;
-  s.v[i][ax] = p_new / m;
-  s.x[i][ax] += dt * s.v[i][ax];
-  return double(s.x[i].squaredNorm());
+inline double elem_rest_now(const Model& model, const State<Real>& s, int e) {
+  if (model.grip_of_elem.empty() || model.grip_of_elem[e] < 0) return model.elem_rest[e];
+  return model.elem_rest[e] + s.grip_payout[size_t(model.grip_of_elem[e])];
 }
 
 // Eq 1-2 for node i: v(t+dt/2) = v(t-dt/2) + dt/m f; x(t+dt) = x(t) + dt v(t+dt/2), with f
@@ -222,7 +212,7 @@ RAVEL_INLINE double free_update(const Model& model, State<Real>& s, int i, const
   s.v_prev[i] = s.v[i];
   s.corr[i].dx_contact.setZero();
   const std::uint8_t fx = model.fixed[i];
-  if (fx == fix_all) return model.grip_of.empty() || model.grip_of[i] < 0 ? 0.0 : grip_update(model, s, i, f);
+  if (fx == fix_all) return 0;
   Eigen::Matrix<Real, 3, 1> v = s.v[i] + (Real(model.dt) * Real(model.inv_mass[i])) * f;
   if (fx) zero_fixed(v, fx);
   s.v[i] = v;

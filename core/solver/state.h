@@ -71,8 +71,9 @@ struct State {
     V3 dv_contact, dv_friction, dv_compress, dx_contact;
   };
   std::vector<Corrections> corr;
-  std::vector<V3> dv_pfriction;  // the projectile's friction (only the nodes it touched: ptouch_list)
-  std::vector<Real> grip_dv;     // per slipping-clamp node (Model::grips): this step's velocity change by the grip
+  std::vector<V3> dv_pfriction;     // the projectile's friction (only the nodes it touched: ptouch_list)
+  std::vector<double> grip_payout;  // per slipping clamp (Model::grips): yarn fed into its element so far, m
+  std::vector<double> grip_heat;    // ... and this step's friction of each (internal_forces; 0 between steps)
   // --- The energy book (core/ledger.h: EnergyBook), and the per-crossing energies summed into it.
   EnergyBook book;
   // (per crossing, in CrossingState below: comp_u, the compression law's stored energy, and
@@ -155,6 +156,7 @@ struct State {
     ar.pod(mark);
     ar.vec(f_ext);
     ar.vec(crimp_damp_stress);
+    ar.vec(grip_payout);
     ar.pod(balance_window);
     ar.mark(0x52564532);  // "RVE2"
   }
@@ -167,7 +169,8 @@ struct State {
     fnv1a(h, v.data(), v.size() * sizeof(V3));
     fnv1a(h, ev.data(), ev.size() * sizeof(Real));
     fnv1a(h, broken_flag.data(), broken_flag.size());
-    for (const auto& c : cr) fnv1a(h, &c.stick_w, sizeof(double));  // (the order of the arrays they were)
+    fnv1a(h, grip_payout.data(), grip_payout.size() * sizeof(double));  // (none with rigid clamps)
+    for (const auto& c : cr) fnv1a(h, &c.stick_w, sizeof(double));      // (the order of the arrays they were)
     for (const auto& c : cr) fnv1a(h, &c.stick_f, sizeof(double));
     fnv1a(h, xp.data(), sizeof(V3));
     fnv1a(h, vp.data(), sizeof(V3));

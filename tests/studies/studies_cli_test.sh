@@ -88,12 +88,14 @@ for series, x, y in chart:
     key = (float(x), series.split(" = ")[1])
     assert abs(float(y) - want[key]) <= 1e-9 * max(1.0, abs(want[key])), (series, x, y, want[key])
 PY
-"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160 --vary yarn.friction=0,0.2 --quiet \
-  --chart-y friction_wrk_J --out "$WORK/sweep" >"$WORK/charty_bad.out" 2>"$WORK/charty_bad.err"
+# (with a fourth velocity: its two new cases run, then the misspelt column is refused)
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=80,120,160,200 --vary yarn.friction=0,0.2 --quiet \
+  --chart-y "max_strain, friction_wrk_J" --out "$WORK/sweep" >"$WORK/charty_bad.out" 2>"$WORK/charty_bad.err"
 rc=$?
 [[ $rc == 2 ]] && grep -q -- "--chart-y friction_wrk_J: no such column" "$WORK/charty_bad.err" ||
   fail "chart-y bad column: exit $rc, $(cat "$WORK/charty_bad.err")"
-[[ $(($(wc -l <"$WORK/sweep/results.csv") - 1)) == 6 ]] || fail "chart-y bad column: results.csv lost rows"
+grep -q "2 run, 6 already finished" "$WORK/charty_bad.out" || fail "chart-y bad column: $(cat "$WORK/charty_bad.out")"
+[[ $(($(wc -l <"$WORK/sweep/results.csv") - 1)) == 8 ]] || fail "chart-y bad column: the new runs were not kept"
 
 # limit on the cheap scene: limit.json with the bracket, the fit and every run. First the
 # reference search (its progress lines count the runs still to make) ...
