@@ -48,6 +48,20 @@ void expect_resume_is_exact(const Scene& scene, double t_stop, const Scene* resu
   EXPECT_EQ(sa.warnings, sb.warnings);
 }
 
+// A slipping clamp's yarn fed out (State::grip_payout) is state: stopped while the clamps
+// feed, the resumed run goes on bit for bit, including the pull-out past the clamp's depth.
+TEST(Checkpoint, SlippingClampsResumeBitForBit) {
+  const Scene s =
+      scene_with({"fabric.width_mm=30", "fabric.length_mm=30", "projectile.diameter_mm=4", "projectile.mass_g=1",
+                  "projectile.velocity_mps=300", "fabric.clamp=slipping", "fabric.clamp_grip_n=60"});
+  {
+    Simulation probe(s);
+    run_until(probe, 40e-6);
+    ASSERT_GT(probe.summary().clamp_slip_max_m, 1e-4) << "the test needs clamps feeding at the stop";
+  }
+  expect_resume_is_exact(s, 40e-6);
+}
+
 TEST(Checkpoint, ASlidingRunContinuesBitForBitThroughFailureAndPerforation) {
   // 300 m/s on the small patch: contact from the first step, yarns break near 20 us and the
   // projectile perforates by about 60 us. Stopped twice: before and after the first break.
