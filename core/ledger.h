@@ -24,7 +24,7 @@ struct Ledger {
   double compression_J = 0;       // stored: the crossings' transverse compression (the law's integral)
   double compression_loss_J = 0;  // dissipated: work of the compression impulses beyond what the law stores
   double external_work_J = 0;     // work done on the system by external loads (tests, pull-out)
-  double clamp_friction_J = 0;    // dissipated by slipping clamps (fabric.clamp = slipping): grip x slide
+  double clamp_friction_J = 0;    // dissipated by slipping clamps (fabric.clamp = slipping): grip x yarn fed
 
   // Energy now held or dissipated, less what external loads put in: equals the initial
   // energy for an exact integration.

@@ -212,14 +212,14 @@ std::vector<KeyDef> make_defs() {
   }
   text_key(
       defs, "fabric.clamp",
-      "rigid (the paper: a clamped yarn end never moves) or slipping (it slides out of the clamp along its yarn "
-      "once the yarn pulls harder than fabric.clamp_grip_n; a test rig's clamp, docs/MODEL.md §7)",
+      "rigid (the paper: no yarn leaves a clamp) or slipping (the clamp feeds yarn out once the yarn pulls harder "
+      "than fabric.clamp_grip_n; a test rig's clamp, docs/MODEL.md §7)",
       {"rigid", "slipping"},
       [](Scene& s, const std::string& v) { s.fabric.clamp = v == "rigid" ? ClampKind::rigid : ClampKind::slipping; },
       [](const Scene& s) { return std::string(to_string(s.fabric.clamp)); });
   NUM("fabric.clamp_grip_n", "N",
       "slipping clamp: pull on one real yarn at which it slides through the clamp (Coulomb friction of the clamp "
-      "faces; about 10-300 N for bolted or pneumatic clamps, above the yarn's break load ~290 N it never slips)",
+      "faces; about 10-250 N for pneumatic to bolted clamps, above the yarn's break load ~290 N it never slips)",
       1, 0, true, inf, fabric.clamp_grip_n);
   NUM("fabric.clamp_depth_mm", "mm",
       "slipping clamp: the length of yarn the clamp holds (its jaws' width, about 10-50 mm); once that much has "

@@ -20,9 +20,9 @@ enum class Precision { double_precision, single_precision };
 enum class ShapeKind { sphere, cylinder, cone };
 // How a crossing's centre distance responds to its normal force (docs/MODEL.md §4).
 enum class CrossingCompression { rigid, hyperbolic };
-// How a clamp holds the yarns that end in it (docs/MODEL.md §7): rigid (the paper: the end
-// node never moves) or slipping (the end node slides along its yarn, out of the clamp, once
-// the yarn's pull exceeds the clamp's grip: Coulomb friction of the clamp faces).
+// How a clamp holds the yarns that end in it (docs/MODEL.md §7): rigid (the paper: no yarn
+// leaves it) or slipping (it feeds yarn into the element that ends in it once that element's
+// pull exceeds the clamp's grip: Coulomb friction of the clamp faces).
 enum class ClampKind { rigid, slipping };
 
 // Which fabric edges are clamped. "left"/"right" are the edges x = -W/2 and x = +W/2

@@ -212,12 +212,12 @@ bool scene_section(GuiApp& app) {
     changed = true;
   }
   help_marker(
-      "Rigid: a clamped yarn end never moves (the paper). Slips at a grip: the clamp feeds yarn out once the yarn "
+      "Rigid: no yarn leaves a clamp (the paper). Slips at a grip: the clamp feeds yarn out once the yarn "
       "pulls harder than the grip, as in a test rig's clamp (fabric.clamp, docs/MODEL.md section 7).");
   ImGui::BeginDisabled(s.fabric.clamp == ClampKind::rigid);
   changed |= slider_si("grip (N/yarn)", &s.fabric.clamp_grip_n, 1, 10, 300, "%.0f");
   help_marker(
-      "Pull on one yarn at which it slides through the clamp (fabric.clamp_grip_n); the yarn breaks at about "
+      "Pull on one yarn at which the clamp feeds it out (fabric.clamp_grip_n); the yarn breaks at about "
       "290 N, so a grip above that never slips.");
   changed |= slider_si("depth (mm)", &s.fabric.clamp_depth_m, 1e3, 5, 60, "%.0f");
   help_marker("Yarn the clamp holds (fabric.clamp_depth_mm): fed out past it, the yarn has left the clamp.");

@@ -1,40 +1,24 @@
-// The slipping clamp (fabric.clamp = slipping, docs/MODEL.md §7): a clamped yarn end that
-// slides out of its clamp, against the clamp faces' Coulomb grip, once its yarn pulls harder
-// than the grip. Checked against one-dimensional wave theory on a single elastic yarn, by the
+// The slipping clamp (fabric.clamp = slipping, docs/MODEL.md §7): the clamp feeds yarn into
+// the element that ends in it, against the clamp faces' Coulomb grip, once that element pulls
+// harder than the grip. Checked against one-dimensional wave theory on a single elastic yarn, by the
 // energy book, and on the default scene where the rigid clamp misplaces the breaks (issue 37).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "fixture.h"
+#include "single_yarn.h"
 
 namespace ravel {
 namespace {
 
 using test::operator+;
 
-constexpr double kE = 7.28e10, kRho = 1440, kA = 7.64e-8, kL0 = 0.844e-3;
+using namespace test::single;
 
-// One straight elastic yarn, 300 mm, struck at 100 m/s by a heavy flat-fronted load (its
-// speed barely changes), the chain's wave speed L0 sqrt(k/m) equal to c (wave_test.cpp).
+// The single yarn of wave_test.cpp at 100 m/s, for 40 us (single_yarn.h).
 std::vector<std::string> single_yarn() {
-  char mass[64];
-  std::snprintf(mass, sizeof mass, "fabric.node_mass_g=%.9g", kRho * kA * kL0 * 1e3);
-  return {"fabric.weave=single_yarn", "fabric.length_mm=300",
-          "yarn.material=elastic",    "yarn.modulus_pa=7.28e10",
-          "yarn.breakable=false",     "projectile.mass_g=1000",
-          "projectile.friction=0",    "projectile.velocity_mps=100",
-          "solver.end_time_us=40",    mass};
-}
-
-// Smith's relation V = c sqrt(2 eps sqrt(eps (1 + eps)) - eps^2) solved for eps.
-double smith_strain(double v, double c) {
-  double lo = 0, hi = 0.5;
-  for (int i = 0; i < 200; ++i) {
-    const double m = 0.5 * (lo + hi);
-    (c * std::sqrt(2 * m * std::sqrt(m * (1 + m)) - m * m) < v ? lo : hi) = m;
-  }
-  return lo;
+  return test::single::single_yarn(100) + std::vector<std::string>{"solver.end_time_us=40"};
 }
 
 TEST(SlippingClamp, GripsOnlyTheClampedYarnEnds) {
