@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -178,6 +179,7 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   // never counts as stopped; it is left out of the bracket with a warning (SPEC §8).
   enum Outcome { stopped, perforated, undecided };
   auto fire = [&](double v, const char* why) {
+    v = run_velocity(v);
     Shot s = shoot(v, why);
     s.velocity_mps = v;
     s.purpose = why;
@@ -200,7 +202,7 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
 
   // Bracket: walk from the start velocity by the growth factor until the outcome flips
   // (downwards from a perforation, upwards from a stop or an undecided run).
-  double v = std::clamp(opt.start_mps, opt.min_mps, opt.max_mps);
+  double v = run_velocity(std::clamp(opt.start_mps, opt.min_mps, opt.max_mps));
   double step = opt.growth;
   Outcome o = fire(v, "bracket");
   double lo = -1, hi = -1;
@@ -212,7 +214,7 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
     step = std::pow(step, std::max(1.0, opt.growth_accel));
     // A step past a bound fires once at the bound (growing steps overshoot it quickly);
     // the search gives up only when the bound itself has been fired.
-    v = std::clamp(v, opt.min_mps, opt.max_mps);
+    v = run_velocity(std::clamp(v, opt.min_mps, opt.max_mps));
     if (v == prev) break;
     o = fire(v, "bracket");
     if (failed) break;
@@ -253,8 +255,8 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
   for (const auto& r : res.runs)
     if (!r.failed && !r.decided && !r.perforated) undecided_at.push_back(r.velocity_mps);
   while (hi - lo > opt.tolerance_mps && budget_left()) {
-    const double mid = next_try();
-    if (mid < 0) break;
+    const double mid = run_velocity(next_try());
+    if (mid <= lo || mid >= hi) break;  // (none left: next_try's -1, or a gap under 1e-6 m/s)
     const Outcome om = fire(mid, "bisect");
     if (failed) break;
     if (om == perforated)
@@ -274,7 +276,7 @@ LimitResult find_ballistic_limit(const ShootFn& shoot, const LimitOptions& opt, 
                                            : "run budget exhausted before the bracket reached the tolerance");
   if (with_fit && !failed) {
     for (double f : opt.fit_factors) {
-      const double vf = res.ballistic_limit_mps * f;
+      const double vf = run_velocity(res.ballistic_limit_mps * f);
       if (vf > opt.max_mps) continue;
       fire(vf, "fit");
       failed = false;  // a failed fit run only loses that point
@@ -517,10 +519,17 @@ std::string fast_rule_names() {
   return out;
 }
 
+double run_velocity(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.6f", v);
+  return std::strtod(b, nullptr);
+}
+
 RunFn scene_runner(const std::string& scene_path, const std::vector<std::string>& overrides,
                    std::function<void(const Simulation&)> on_run, const std::string& cache_dir) {
   const std::string fingerprint = cache_dir.empty() ? std::string() : run_fingerprint(scene_path, overrides);
   return [=](double v, const std::string&, const std::atomic<bool>* stop) {
+    v = run_velocity(v);
     auto ov = overrides;
     char b[64];
     std::snprintf(b, sizeof b, "projectile.velocity_mps=%.6f", v);

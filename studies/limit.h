@@ -48,6 +48,15 @@ struct Shot {
   int round = 0;  // fast search: 1 + the deepest round of the runs finished before it started
 };
 
+// The velocity a search's run simulates and lists: v to 1e-6 m/s, the 6 decimals with which
+// scene_runner writes it into the run's scene (projectile.velocity_mps). Both searches run and
+// record only such velocities. Near the ballistic limit an outcome can flip under a change of
+// 1e-9 of the velocity (docs/MODEL.md §9: 75.942528 m/s perforates on the default scene, 6e-8
+// m/s more rebounds), so the number a search lists must be the one its run had, or rerunning
+// a listed velocity does not reproduce its outcome (until 2026-12-07 the list kept the
+// search's unrounded number, up to 5e-7 m/s off).
+double run_velocity(double v);
+
 using ShootFn = std::function<Shot(double velocity_mps, const std::string& purpose)>;
 // A run that can be stopped on its own: when `stop` becomes true the run ends at once and
 // comes back with cancelled = true (it is not kept in a cache).

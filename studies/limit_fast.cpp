@@ -547,7 +547,7 @@ class Engine {
     if (free <= 0 || budget() <= 0) return;
     auto plans = plan(std::min(free, budget()));
     for (const auto& p : plans) {
-      Flight f{next_id_++, p.v, p.purpose, ex_.now(), depth_ + 1, p.fit_index};
+      Flight f{next_id_++, run_velocity(p.v), p.purpose, ex_.now(), depth_ + 1, p.fit_index};
       flying_.push_back(f);
       ex_.start(f.id, f.v, f.purpose);
       if (hooks_.on_start) {
