@@ -405,6 +405,132 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, cons
   return out;
 }
 
+Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string, std::string>* base_of) {
+  if (repeats < 1 || repeats > 1000)
+    throw StudyError("--repeats " + std::to_string(repeats) + ": expected a whole number from 1 to 1000");
+  Vary out{velocities.key, {}};
+  std::vector<double> vs;
+  for (const auto& text : velocities.values) {
+    double v;
+    if (!parse_number(text, &v))
+      throw StudyError("--vary " + velocities.key + ": value '" + text + "' is not a number");
+    vs.push_back(v);
+  }
+  std::vector<double> sorted = vs;
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t i = 0; i + 1 < sorted.size(); ++i)
+    if ((sorted[i + 1] - sorted[i]) / kRepeatStep_mps < repeats - 1e-3)  // (in steps, beside rounding)
+      throw StudyError("--repeats " + std::to_string(repeats) + ": the velocities " + format_number(sorted[i]) +
+                       " and " + format_number(sorted[i + 1]) + " m/s lie closer than " + std::to_string(repeats) +
+                       " x 1e-6 m/s, so their repeats would overlap");
+  for (size_t i = 0; i < vs.size(); ++i)
+    for (int k = 0; k < repeats; ++k) {
+      char b[64];
+      std::snprintf(b, sizeof b, "%.6f", vs[i] + k * kRepeatStep_mps);
+      out.values.push_back(b);
+      if (base_of) (*base_of)[b] = velocities.values[i];
+    }
+  return out;
+}
+
+PerforationTable perforation_table(const Csv& results, const std::vector<std::string>& varied_keys,
+                                   const std::map<std::string, std::string>& base_of) {
+  PerforationTable t;
+  struct Group {
+    std::vector<std::string> keys;  // the varied keys' values, velocities at their base
+    int runs = 0, decided = 0, perforated = 0, undecided = 0, diverged = 0;
+    double residual_sum = 0, energy_sum = 0;
+    int energy_n = 0;
+  };
+  std::vector<Group> groups;
+  std::map<std::vector<std::string>, size_t> index;
+  for (const auto& r : results.rows) {
+    std::vector<std::string> keys;
+    for (const auto& k : varied_keys) {
+      std::string v = results.cell(r, k);
+      if (const auto it = base_of.find(v); k == "projectile.velocity_mps" && it != base_of.end()) v = it->second;
+      keys.push_back(v);
+    }
+    if (!index.count(keys)) index[keys] = groups.size(), groups.push_back(Group{keys});
+    Group& g = groups[index[keys]];
+    ++g.runs;
+    if (results.cell(r, "status") != "completed") {
+      ++g.diverged;
+      continue;
+    }
+    if (results.cell(r, "end_reason") == "end_time") {
+      ++g.undecided;
+      continue;
+    }
+    ++g.decided;
+    double x;
+    if (parse_number(results.cell(r, "energy_absorbed_J"), &x)) g.energy_sum += x, ++g.energy_n;
+    if (results.cell(r, "perforated") == "true") {
+      ++g.perforated;
+      if (parse_number(results.cell(r, "residual_velocity_mps"), &x)) g.residual_sum += x;
+    }
+  }
+  t.groups = int(groups.size());
+  for (const auto& k : varied_keys) t.csv += csv_cell(k) + ",";
+  t.csv +=
+      "runs,decided,perforated,perforation_probability,undecided,diverged,residual_velocity_mps,energy_absorbed_J\n";
+  auto num = [](double v) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return std::string(b);
+  };
+  for (const auto& g : groups) {
+    for (const auto& v : g.keys) t.csv += csv_cell(v) + ",";
+    t.csv += std::to_string(g.runs) + "," + std::to_string(g.decided) + "," + std::to_string(g.perforated) + "," +
+             (g.decided ? num(double(g.perforated) / g.decided) : "") + "," + std::to_string(g.undecided) + "," +
+             std::to_string(g.diverged) + "," + (g.perforated ? num(g.residual_sum / g.perforated) : "") + "," +
+             (g.energy_n ? num(g.energy_sum / g.energy_n) : "") + "\n";
+  }
+  // The chart: probability against the first key, a series per combination of the others.
+  if (varied_keys.empty() || groups.empty()) return t;
+  for (const auto& g : groups) {
+    double x;
+    if (!parse_number(g.keys[0], &x)) return t;
+  }
+  Chart& c = t.chart;
+  c.title = "perforation probability vs " + varied_keys[0];
+  c.subtitle = "share of the decided runs that perforated";
+  c.x = {varied_keys[0], ""};
+  for (const auto& k : scene_keys())
+    if (k.key == varied_keys[0]) c.x.unit = k.unit;
+  c.y = {"perforation probability", ""};
+  c.y.fixed_range = true;
+  c.y.min = 0;
+  c.y.max = 1;
+  std::map<std::string, size_t> series;
+  for (const auto& g : groups) {
+    std::string name;
+    for (size_t k = 1; k < varied_keys.size(); ++k)
+      name += (name.empty() ? "" : ", ") + varied_keys[k] + " = " + g.keys[k];
+    if (name.empty()) name = "perforation probability";
+    if (!series.count(name)) {
+      series[name] = c.series.size();
+      Series s;
+      s.name = name;
+      c.series.push_back(s);
+    }
+    Series& s = c.series[series[name]];
+    double x;
+    parse_number(g.keys[0], &x);
+    s.x.push_back(x);
+    s.y.push_back(g.decided ? double(g.perforated) / g.decided : NAN);
+  }
+  for (auto& s : c.series) {
+    std::vector<size_t> o(s.x.size());
+    for (size_t i = 0; i < o.size(); ++i) o[i] = i;
+    std::sort(o.begin(), o.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
+    Series u = s;
+    for (size_t i = 0; i < o.size(); ++i) u.x[i] = s.x[o[i]], u.y[i] = s.y[o[i]];
+    s = u;
+  }
+  return t;
+}
+
 SweepReport run_sweep(const std::vector<Case>& all_cases, const std::vector<Case>& to_run, const SweepOptions& opt,
                       const std::vector<std::string>& varied_keys, const SweepHooks& hooks,
                       const std::atomic<bool>* interrupt) {

@@ -50,6 +50,16 @@ struct Case {
 // Every combination; the last --vary changes fastest.
 std::vector<Case> expand_cases(const std::vector<Vary>& vary);
 
+// Repeats (`ravel sweep --repeats N`): near the ballistic limit the outcome of one run is a
+// random variable. A change of 1e-9 of the impact velocity changes which crossing slips or
+// which element breaks first, and that decides perforation (docs/studies.md, "The zone of
+// mixed results"). Each velocity v of a --vary projectile.velocity_mps becomes N velocities
+// v + k x 1e-6 m/s, k = 0..N-1, each its own case. base_of maps each new value (as text, 6
+// decimals) to the v it was made from. Throws StudyError when two values lie closer than
+// N x 1e-6 m/s (their repeats would overlap) or N is outside [1, 1000].
+inline constexpr double kRepeatStep_mps = 1e-6;
+Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string, std::string>* base_of);
+
 struct Shard {
   int index = 1, count = 1;  // 1-based: 1/1 = everything
   bool contains(int case_index) const { return case_index % count == index - 1; }
@@ -163,6 +173,22 @@ Csv parse_csv(const std::string& text);
 // keys. Each chart's file stem is returned beside it.
 std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, const std::vector<std::string>& varied_keys,
                                                         const std::vector<std::string>& extra_y = {});
+// The perforation probability of a sweep with repeats: results.csv's rows grouped by every
+// varied key, velocities by the value they were repeated from (base_of, from
+// repeat_velocities; a value not in it stands for itself). `csv`: one row per group, the
+// varied keys then runs, perforated, perforation_probability (perforated / decided runs;
+// undecided and diverged runs are counted apart), residual_velocity_mps (mean over the
+// perforating runs) and energy_absorbed_J (mean); `chart`: the probability against
+// varied_keys[0], one series per combination of the others (empty when that key is not
+// numeric).
+struct PerforationTable {
+  std::string csv;
+  Chart chart;
+  int groups = 0;
+};
+PerforationTable perforation_table(const Csv& results, const std::vector<std::string>& varied_keys,
+                                   const std::map<std::string, std::string>& base_of);
+
 // The unit a results.csv column's name ends in ("energy_absorbed_J" -> "J", "_mps" -> "m/s";
 // "" for counts and ratios), and its words ("energy absorbed").
 std::string column_unit(const std::string& column);

@@ -13,7 +13,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -102,6 +104,24 @@ int cmd_sweep(const Args& args) {
         throw UsageError("--vary " + vary.back().key + ": key varied twice");
       keys.push_back(vary.back().key);
     }
+    // --repeats: each velocity N times, 1e-6 m/s apart (studies::repeat_velocities).
+    std::map<std::string, std::string> base_of;
+    int repeats = 1;
+    if (a.flags.count("repeats")) {
+      const std::string& text = a.flags["repeats"];
+      char* end = nullptr;
+      const long n = std::strtol(text.c_str(), &end, 10);
+      if (text.empty() || *end != 0 || n < 1 || n > 1000)
+        throw UsageError("--repeats: expected a whole number from 1 to 1000, got '" + text + "'");
+      repeats = int(n);
+      const auto it = std::find(keys.begin(), keys.end(), "projectile.velocity_mps");
+      if (it == keys.end())
+        throw UsageError(
+            "--repeats needs --vary projectile.velocity_mps=...: it runs each of those velocities N times, 1e-6 m/s "
+            "apart");
+      auto& vv = vary[size_t(it - keys.begin())];
+      vv = studies::repeat_velocities(vv, repeats, &base_of);
+    }
     // The charts' x axis: the first --vary key unless --chart-x names another (cases keep their names).
     std::vector<std::string> chart_keys = keys;
     if (a.flags.count("chart-x") && !studies::put_chart_x_first(&chart_keys, a.flags["chart-x"]))
@@ -178,6 +198,18 @@ int cmd_sweep(const Args& args) {
       }
       studies::write_chart(chart, opt.out_dir + "/charts/" + stem);
       std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
+    }
+    if (repeats > 1 && !results.rows.empty()) {
+      // The perforation probability per velocity (and per combination of the other keys).
+      const auto table = studies::perforation_table(results, chart_keys, base_of);
+      write_file_atomic(opt.out_dir + "/perforation.csv", table.csv);
+      std::printf("  %s/perforation.csv (%d velocities x %d repeats)\n", opt.out_dir.c_str(), table.groups, repeats);
+      if (studies::finite_point_count(table.chart) > 0) {
+        prepare_output_dir(opt.out_dir + "/charts");
+        const std::string stem = "perforation_probability_vs_" + chart_keys[0];
+        studies::write_chart(table.chart, opt.out_dir + "/charts/" + stem);
+        std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
+      }
     }
     if (rep.interrupted) return exit_interrupted;
     return rep.cases_failed ? exit_failure : exit_ok;

@@ -98,6 +98,10 @@ std::vector<Command> make_table() {
         {"chart-y", "COLUMN,...", false,
          "more results.csv columns to chart beside energy absorbed and residual velocity (e.g. "
          "first_break_distance_mm,clamp_friction_J; rerun a finished sweep with it to chart it)"},
+        {"repeats", "N", false,
+         "run each --vary projectile.velocity_mps value N times, raised by 0, 1e-6, 2e-6 ... m/s: near the ballistic "
+         "limit an outcome is a random variable (docs/studies.md, the zone of mixed results); writes "
+         "DIR/perforation.csv and the perforation probability chart"},
         {"no-extend", nullptr, false,
          "a run that reaches its end time undecided is not extended to solver.max_end_time_us"},
         {"restart", nullptr, false, "start over in a folder that holds another sweep's cases (they are removed)"},

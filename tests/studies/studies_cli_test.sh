@@ -97,6 +97,34 @@ rc=$?
 grep -q "2 run, 6 already finished" "$WORK/charty_bad.out" || fail "chart-y bad column: $(cat "$WORK/charty_bad.out")"
 [[ $(($(wc -l <"$WORK/sweep/results.csv") - 1)) == 8 ]] || fail "chart-y bad column: the new runs were not kept"
 
+# --repeats: each velocity three times, 1e-6 m/s apart, each a case; perforation.csv counts
+# each velocity's perforations from results.csv, and the probability is charted.
+expect_refused repeats_no_velocity "--repeats needs --vary projectile.velocity_mps" sweep --vary yarn.friction=0.1 \
+  --repeats 3
+expect_refused repeats_overlap "lie closer than 2 x 1e-6 m/s" sweep --vary projectile.velocity_mps=80,80.000001 \
+  --repeats 2
+expect_refused repeats_bad "--repeats: expected a whole number from 1 to 1000" sweep \
+  --vary projectile.velocity_mps=80 --repeats x
+"$RAVEL" sweep "${CHEAP[@]}" --vary projectile.velocity_mps=45,70 --repeats 3 --quiet --out "$WORK/rep" \
+  >"$WORK/rep.out" 2>&1 || fail "repeats: $(cat "$WORK/rep.out")"
+[[ -s $WORK/rep/charts/perforation_probability_vs_projectile.velocity_mps.png ]] ||
+  fail "repeats: no probability chart: $(ls "$WORK/rep/charts")"
+/usr/bin/python3 - "$WORK/rep/results.csv" "$WORK/rep/perforation.csv" <<'PY' || fail "repeats: perforation.csv"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+table = list(csv.DictReader(open(sys.argv[2])))
+assert sorted(r["projectile.velocity_mps"] for r in rows) == [
+    "45.000000", "45.000001", "45.000002", "70.000000", "70.000001", "70.000002"], rows
+assert [t["projectile.velocity_mps"] for t in table] == ["45", "70"], table
+for t in table:
+    mine = [r for r in rows if r["projectile.velocity_mps"].startswith(t["projectile.velocity_mps"] + ".")]
+    assert int(t["runs"]) == 3, t
+    decided = [r for r in mine if r["end_reason"] != "end_time"]
+    perf = sum(r["perforated"] == "true" for r in decided)
+    assert int(t["perforated"]) == perf, (t, perf)
+    assert abs(float(t["perforation_probability"]) - perf / len(decided)) < 1e-6, t
+PY
+
 # limit on the cheap scene: limit.json with the bracket, the fit and every run. First the
 # reference search (its progress lines count the runs still to make) ...
 "$RAVEL" limit "${CHEAP[@]}" --start 50 --tolerance 2 --reference --out "$WORK/limit" >"$WORK/limit.out" 2>&1

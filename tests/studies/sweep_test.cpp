@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -75,6 +76,60 @@ TEST(Sweep, CasesAreTheCartesianProductLastKeyFastest) {
     names.insert(cases[i].name());
   }
   EXPECT_EQ(names.size(), cases.size());  // folder names are unique
+}
+
+// --repeats: each velocity N times, 1e-6 m/s apart, each repeat its own case; velocities closer
+// than that are refused; the table counts each velocity's decided runs and their perforations.
+TEST(Sweep, RepeatsRunEachVelocityNTimesAndCountPerforations) {
+  std::map<std::string, std::string> base;
+  const Vary r = repeat_velocities(parse_vary("projectile.velocity_mps=78,80"), 3, &base);
+  EXPECT_EQ(r.values,
+            (std::vector<std::string>{"78.000000", "78.000001", "78.000002", "80.000000", "80.000001", "80.000002"}));
+  EXPECT_EQ(base.at("80.000002"), "80");
+  EXPECT_EQ(expand_cases({r, {"yarn.friction", {"0.2"}}}).size(), 6u);  // a case each
+  auto message = [](const Vary& v, int n) {
+    try {
+      repeat_velocities(v, n, nullptr);
+    } catch (const StudyError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({"projectile.velocity_mps", {"80", "80.000002"}}, 3).find("lie closer than 3 x 1e-6 m/s"),
+            std::string::npos);
+  EXPECT_EQ(message({"projectile.velocity_mps", {"80", "80.000002"}}, 2), "no error");
+  EXPECT_NE(message(r, 0).find("--repeats 0"), std::string::npos);
+  // results.csv rows: at 78 m/s one of three perforates; at 80 two perforate, one is still
+  // creeping at its end time (undecided: not in the probability) and one diverged.
+  Csv csv = parse_csv(
+      "case,projectile.velocity_mps,status,end_reason,perforated,residual_velocity_mps,energy_absorbed_J\n"
+      "a,78.000000,completed,rebounded,false,0,20\n"
+      "b,78.000001,completed,perforated,true,4,19\n"
+      "c,78.000002,completed,caught,false,0,21\n"
+      "d,80.000000,completed,perforated,true,10,22\n"
+      "e,80.000001,completed,end_time,false,1,22\n"
+      "f,80.000002,diverged,,false,,\n"
+      "g,80.000003,completed,perforated,true,14,20\n");
+  base["80.000003"] = "80";
+  const auto t = perforation_table(csv, {"projectile.velocity_mps"}, base);
+  EXPECT_EQ(t.groups, 2);
+  const Csv out = parse_csv(t.csv);
+  ASSERT_EQ(out.rows.size(), 2u);
+  EXPECT_EQ(out.cell(out.rows[0], "projectile.velocity_mps"), "78");
+  EXPECT_EQ(out.cell(out.rows[0], "runs"), "3");
+  EXPECT_EQ(out.cell(out.rows[0], "perforated"), "1");
+  EXPECT_EQ(out.cell(out.rows[0], "perforation_probability"), "0.333333");
+  EXPECT_EQ(out.cell(out.rows[0], "residual_velocity_mps"), "4");
+  EXPECT_EQ(out.cell(out.rows[0], "energy_absorbed_J"), "20");
+  EXPECT_EQ(out.cell(out.rows[1], "runs"), "4");
+  EXPECT_EQ(out.cell(out.rows[1], "decided"), "2");
+  EXPECT_EQ(out.cell(out.rows[1], "perforation_probability"), "1");
+  EXPECT_EQ(out.cell(out.rows[1], "undecided"), "1");
+  EXPECT_EQ(out.cell(out.rows[1], "diverged"), "1");
+  EXPECT_EQ(out.cell(out.rows[1], "residual_velocity_mps"), "12");
+  ASSERT_EQ(t.chart.series.size(), 1u);
+  EXPECT_EQ(t.chart.series[0].x, (std::vector<double>{78, 80}));
+  EXPECT_NEAR(t.chart.series[0].y[0], 1.0 / 3, 1e-12);
 }
 
 TEST(Sweep, ShardsPartitionTheCasesExactlyOnce) {
