@@ -423,12 +423,14 @@ Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string
       throw StudyError("--repeats " + std::to_string(repeats) + ": the velocities " + format_number(sorted[i]) +
                        " and " + format_number(sorted[i + 1]) + " m/s lie closer than " + std::to_string(repeats) +
                        " x 1e-6 m/s, so their repeats would overlap");
+  // Repeat 0 keeps the value as given, so that a sweep rerun with --repeats reuses its runs.
   for (size_t i = 0; i < vs.size(); ++i)
     for (int k = 0; k < repeats; ++k) {
       char b[64];
       std::snprintf(b, sizeof b, "%.6f", vs[i] + k * kRepeatStep_mps);
-      out.values.push_back(b);
-      if (base_of) (*base_of)[b] = velocities.values[i];
+      const std::string text = k == 0 ? velocities.values[i] : std::string(b);
+      out.values.push_back(text);
+      if (base_of) (*base_of)[text] = velocities.values[i];
     }
   return out;
 }

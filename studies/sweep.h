@@ -54,8 +54,8 @@ std::vector<Case> expand_cases(const std::vector<Vary>& vary);
 // random variable. A change of 1e-9 of the impact velocity changes which crossing slips or
 // which element breaks first, and that decides perforation (docs/studies.md, "The zone of
 // mixed results"). Each velocity v of a --vary projectile.velocity_mps becomes N velocities
-// v + k x 1e-6 m/s, k = 0..N-1, each its own case. base_of maps each new value (as text, 6
-// decimals) to the v it was made from. Throws StudyError when two values lie closer than
+// v + k x 1e-6 m/s, k = 0..N-1, each its own case (repeat 0 is v as given, the others have 6
+// decimals), and base_of maps each value to the v it was made from. Throws StudyError when two values lie closer than
 // N x 1e-6 m/s (their repeats would overlap) or N is outside [1, 1000].
 inline constexpr double kRepeatStep_mps = 1e-6;
 Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string, std::string>* base_of);

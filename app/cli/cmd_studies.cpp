@@ -120,7 +120,7 @@ int cmd_sweep(const Args& args) {
             "--repeats needs --vary projectile.velocity_mps=...: it runs each of those velocities N times, 1e-6 m/s "
             "apart");
       auto& vv = vary[size_t(it - keys.begin())];
-      vv = studies::repeat_velocities(vv, repeats, &base_of);
+      if (repeats > 1) vv = studies::repeat_velocities(vv, repeats, &base_of);
     }
     // The charts' x axis: the first --vary key unless --chart-x names another (cases keep their names).
     std::vector<std::string> chart_keys = keys;
