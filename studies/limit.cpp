@@ -155,7 +155,10 @@ void describe_error(LimitResult& res) {
   res.error_mps = 0.5 * (res.hi_mps - res.lo_mps);
   std::string note =
       "half the final bracket: its ends are full runs that stopped (lo) and perforated (hi), so the limit lies in it "
-      "when perforation is a threshold in velocity; the rules add 0 m/s";
+      "when perforation is a threshold in velocity; the rules add 0 m/s. Near the limit one run is a draw from a zone "
+      "of mixed results (on the default scene at mu = 0.2 a velocity 1e-6 m/s higher can give the other outcome, and "
+      "the perforation probability rises from 0 to 1 over about 5 m/s): another search path can land elsewhere in "
+      "that zone; `ravel sweep --repeats N` measures the probability per velocity (docs/studies.md)";
   bool non_monotone = false;
   for (const auto& w : res.warnings) non_monotone |= w.rfind("non-monotone", 0) == 0;
   if (non_monotone) note += "; but some runs contradict a threshold (see warnings): the error is larger";

@@ -274,6 +274,9 @@ int limit_report(const CommonArgs& a, const Scene& scene, const studies::LimitRe
   std::printf("  %s search, %d job%s, %d rounds; error estimate +-%.2f m/s%s\n", r.method.c_str(), r.jobs,
               r.jobs == 1 ? "" : "s", r.rounds, r.error_mps,
               r.runs_cancelled ? (", " + std::to_string(r.runs_cancelled) + " moot runs stopped early").c_str() : "");
+  std::printf(
+      "  (near the limit one run is one draw of a random outcome: another search can land elsewhere in the zone of "
+      "mixed results; ravel sweep --repeats N measures the perforation probability, docs/studies.md)\n");
   if (resumed)
     std::printf("  %d of the runs kept from an earlier, interrupted search (%s/runs/)\n", resumed, a.out_dir.c_str());
   if (!r.converged) std::printf("  NOT converged to the tolerance (see the warnings)\n");
