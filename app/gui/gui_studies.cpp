@@ -292,10 +292,16 @@ void limit_window(GuiApp& app) {
   if (!s.error.empty()) ImGui::TextColored(kBad, "%s", s.error.c_str());
   ImGui::PopTextWrapPos();
   if (s.finished) {
-    if (s.result.bracketed)
+    if (s.result.bracketed) {
       ImGui::Text("ballistic limit %.1f m/s (bracket %.2f - %.2f, +-%.2f m/s)%s", s.result.ballistic_limit_mps,
                   s.result.lo_mps, s.result.hi_mps, s.result.error_mps, s.result.converged ? "" : ", not converged");
-    else
+      ImGui::SameLine();
+      help_marker(
+          "The bracket of this search's runs. Near the limit one run is one draw of a random outcome: a velocity "
+          "1e-6 m/s higher can give the other one, and on the default scene at mu = 0.2 the perforation probability "
+          "rises from 0 to 1 over about 5 m/s (the zone of mixed results). Another search can land elsewhere in it; "
+          "compare limits that differ by more. ravel sweep --repeats N measures the probability (docs/studies.md).");
+    } else
       ImGui::TextColored(kBad, "no bracket: %s", s.result.warnings.empty() ? "" : s.result.warnings[0].c_str());
     ImGui::TextDisabled("%s search, %d run%s in flight, %d rounds, %d moot runs stopped, %.0f s",
                         s.result.method.c_str(), s.result.jobs, s.result.jobs == 1 ? "" : "s", s.result.rounds,
