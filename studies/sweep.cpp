@@ -442,7 +442,7 @@ PerforationTable perforation_table(const Csv& results, const std::vector<std::st
     std::vector<std::string> keys;  // the varied keys' values, velocities at their base
     int runs = 0, decided = 0, perforated = 0, undecided = 0, diverged = 0;
     double residual_sum = 0, energy_sum = 0;
-    int energy_n = 0;
+    int energy_n = 0, residual_n = 0;
   };
   std::vector<Group> groups;
   std::map<std::vector<std::string>, size_t> index;
@@ -469,7 +469,7 @@ PerforationTable perforation_table(const Csv& results, const std::vector<std::st
     if (parse_number(results.cell(r, "energy_absorbed_J"), &x)) g.energy_sum += x, ++g.energy_n;
     if (results.cell(r, "perforated") == "true") {
       ++g.perforated;
-      if (parse_number(results.cell(r, "residual_velocity_mps"), &x)) g.residual_sum += x;
+      if (parse_number(results.cell(r, "residual_velocity_mps"), &x)) g.residual_sum += x, ++g.residual_n;
     }
   }
   t.groups = int(groups.size());
@@ -485,7 +485,7 @@ PerforationTable perforation_table(const Csv& results, const std::vector<std::st
     for (const auto& v : g.keys) t.csv += csv_cell(v) + ",";
     t.csv += std::to_string(g.runs) + "," + std::to_string(g.decided) + "," + std::to_string(g.perforated) + "," +
              (g.decided ? num(double(g.perforated) / g.decided) : "") + "," + std::to_string(g.undecided) + "," +
-             std::to_string(g.diverged) + "," + (g.perforated ? num(g.residual_sum / g.perforated) : "") + "," +
+             std::to_string(g.diverged) + "," + (g.residual_n ? num(g.residual_sum / g.residual_n) : "") + "," +
              (g.energy_n ? num(g.energy_sum / g.energy_n) : "") + "\n";
   }
   // The chart: probability against the first key, a series per combination of the others.

@@ -199,11 +199,17 @@ int cmd_sweep(const Args& args) {
       studies::write_chart(chart, opt.out_dir + "/charts/" + stem);
       std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
     }
+    if (repeats <= 1) {  // a table or chart left from a rerun with --repeats would disagree with results.csv
+      std::error_code ec;
+      std::filesystem::remove(opt.out_dir + "/perforation.csv", ec);
+      for (const char* ext : {".png", ".svg", ".csv"})
+        std::filesystem::remove(opt.out_dir + "/charts/perforation_probability_vs_" + chart_keys[0] + ext, ec);
+    }
     if (repeats > 1 && !results.rows.empty()) {
       // The perforation probability per velocity (and per combination of the other keys).
       const auto table = studies::perforation_table(results, chart_keys, base_of);
       write_file_atomic(opt.out_dir + "/perforation.csv", table.csv);
-      std::printf("  %s/perforation.csv (%d velocities x %d repeats)\n", opt.out_dir.c_str(), table.groups, repeats);
+      std::printf("  %s/perforation.csv (%d rows of %d repeats)\n", opt.out_dir.c_str(), table.groups, repeats);
       if (studies::finite_point_count(table.chart) > 0) {
         prepare_output_dir(opt.out_dir + "/charts");
         const std::string stem = "perforation_probability_vs_" + chart_keys[0];
@@ -349,6 +355,9 @@ int cmd_limit(const Args& args) {
     const Scene scene = load_scene(scene_path, ov);
     studies::LimitOptions lo;
     lo.tolerance_mps = parse_positive(a, "tolerance", 1.0);
+    if (lo.tolerance_mps < 1e-4)  // (the bisection would split gaps of a few 1e-6 m/s steps onto their ends)
+      throw UsageError("--tolerance: at least 0.0001 m/s, got " + a.flags["tolerance"] +
+                       " (the searches run velocities to 1e-6 m/s)");
     lo.start_mps = parse_positive(a, "start", 100.0);
     lo.max_runs = int(parse_positive(a, "max-runs", 60));
     lo.jobs = reference ? 1 : jobs_from(a);

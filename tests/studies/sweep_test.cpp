@@ -131,6 +131,35 @@ TEST(Sweep, RepeatsRunEachVelocityNTimesAndCountPerforations) {
   EXPECT_NEAR(t.chart.series[0].y[0], 1.0 / 3, 1e-12);
 }
 
+// With two varied keys (friction put first, as --chart-x yarn.friction does) the table
+// groups by both, each velocity at its base, and the chart has a series per velocity.
+TEST(Sweep, RepeatsTableGroupsByEveryKeyWhicheverComesFirst) {
+  std::map<std::string, std::string> base;
+  repeat_velocities(parse_vary("projectile.velocity_mps=80,90"), 2, &base);
+  const Csv csv = parse_csv(
+      "case,projectile.velocity_mps,yarn.friction,status,end_reason,perforated,residual_velocity_mps\n"
+      "a,80,0.2,completed,rebounded,false,0\n"
+      "b,80.000001,0.2,completed,perforated,true,5\n"
+      "c,80,1,completed,perforated,true,30\n"
+      "d,80.000001,1,completed,perforated,true,20\n"
+      "e,90,0.2,completed,perforated,true,15\n"
+      "f,90.000001,0.2,completed,perforated,true,17\n");
+  const auto t = perforation_table(csv, {"yarn.friction", "projectile.velocity_mps"}, base);
+  EXPECT_EQ(t.groups, 3);
+  const Csv out = parse_csv(t.csv);
+  ASSERT_EQ(out.rows.size(), 3u);
+  EXPECT_EQ(out.header[0], "yarn.friction");
+  EXPECT_EQ(out.cell(out.rows[0], "projectile.velocity_mps"), "80");
+  EXPECT_EQ(out.cell(out.rows[0], "perforation_probability"), "0.5");
+  EXPECT_EQ(out.cell(out.rows[1], "yarn.friction"), "1");
+  EXPECT_EQ(out.cell(out.rows[1], "residual_velocity_mps"), "25");
+  EXPECT_EQ(out.cell(out.rows[2], "projectile.velocity_mps"), "90");
+  ASSERT_EQ(t.chart.series.size(), 2u);  // one per velocity, x = friction
+  EXPECT_EQ(t.chart.series[0].name, "projectile.velocity_mps = 80");
+  EXPECT_EQ(t.chart.series[0].x, (std::vector<double>{0.2, 1.0}));
+  EXPECT_EQ(t.chart.series[0].y, (std::vector<double>{0.5, 1.0}));
+}
+
 TEST(Sweep, ShardsPartitionTheCasesExactlyOnce) {
   const auto all = expand_cases({{"a.x", {"1", "2", "3", "4", "5", "6", "7"}}, {"b.y", {"p", "q", "r"}}});
   for (int n = 1; n <= 25; ++n) {
