@@ -214,6 +214,40 @@ void remove_stale_temporaries(const std::string& out_dir) {
   }
 }
 
+// A chart over the first varied key (with the key's unit), one series per combination of
+// the others: point() adds to the series of that name, sorted() orders each series by x.
+struct SeriesChart {
+  Chart c;
+  std::map<std::string, size_t> index;
+  SeriesChart(const std::string& title, const std::string& x_key) {
+    c.title = title;
+    c.x = {x_key, ""};
+    for (const auto& k : scene_keys())
+      if (k.key == x_key) c.x.unit = k.unit;
+  }
+  void point(const std::string& name, double x, double y) {
+    auto [it, added] = index.emplace(name, c.series.size());
+    if (added) {
+      Series s;
+      s.name = name;
+      c.series.push_back(s);
+    }
+    c.series[it->second].x.push_back(x);
+    c.series[it->second].y.push_back(y);
+  }
+  Chart sorted() {
+    for (auto& s : c.series) {
+      std::vector<size_t> o(s.x.size());
+      for (size_t i = 0; i < o.size(); ++i) o[i] = i;
+      std::sort(o.begin(), o.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
+      Series t = s;
+      for (size_t i = 0; i < o.size(); ++i) t.x[i] = s.x[o[i]], t.y[i] = s.y[o[i]];
+      s = t;
+    }
+    return c;
+  }
+};
+
 }  // namespace
 
 std::string results_csv(const std::string& out_dir, const std::vector<Case>& cases,
@@ -359,14 +393,10 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, cons
   for (const auto& y : ys) {
     const int yc = results.column(y.column);
     if (yc < 0) continue;
-    Chart c;
-    c.title = y.label + " vs " + varied_keys[0];
-    c.x = {varied_keys[0], ""};
-    for (const auto& k : scene_keys())
-      if (k.key == varied_keys[0]) c.x.unit = k.unit;
+    SeriesChart sc(y.label + " vs " + varied_keys[0], varied_keys[0]);
+    Chart& c = sc.c;
     c.y = {y.label, y.unit};
     c.y.include_zero = true;
-    std::map<std::string, size_t> index;
     int c_left_out = 0;
     for (const auto& r : results.rows) {
       std::string name;
@@ -375,32 +405,16 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, cons
         name += (name.empty() ? "" : ", ") + varied_keys[k] + " = " + (kc >= 0 ? r[size_t(kc)] : "");
       }
       if (name.empty()) name = y.label;
-      if (!index.count(name)) {
-        index[name] = c.series.size();
-        Series s;
-        s.name = name;
-        c.series.push_back(s);
-      }
-      Series& s = c.series[index[name]];
       double xv, yv;
       parse_number(r[size_t(xc)], &xv);
       if (!parse_number(r[size_t(yc)], &yv)) yv = NAN;
-      const int sc = results.column("status");
-      if (sc >= 0 && r[size_t(sc)] != "completed") yv = NAN, ++c_left_out;  // diverged: no answer
-      s.x.push_back(xv);
-      s.y.push_back(yv);
+      const int stc = results.column("status");
+      if (stc >= 0 && r[size_t(stc)] != "completed") yv = NAN, ++c_left_out;  // diverged: no answer
+      sc.point(name, xv, yv);
     }
     if (c_left_out)
       c.subtitle = std::to_string(c_left_out) + " case(s) left out: the run diverged (see results.csv, status)";
-    for (auto& s : c.series) {  // sort each series by x
-      std::vector<size_t> o(s.x.size());
-      for (size_t i = 0; i < o.size(); ++i) o[i] = i;
-      std::sort(o.begin(), o.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
-      Series t = s;
-      for (size_t i = 0; i < o.size(); ++i) t.x[i] = s.x[o[i]], t.y[i] = s.y[o[i]];
-      s = t;
-    }
-    out.emplace_back(y.column + "_vs_" + varied_keys[0], c);
+    out.emplace_back(y.column + "_vs_" + varied_keys[0], sc.sorted());
   }
   return out;
 }
@@ -494,42 +508,22 @@ PerforationTable perforation_table(const Csv& results, const std::vector<std::st
     double x;
     if (!parse_number(g.keys[0], &x)) return t;
   }
-  Chart& c = t.chart;
-  c.title = "perforation probability vs " + varied_keys[0];
+  SeriesChart sc("perforation probability vs " + varied_keys[0], varied_keys[0]);
+  Chart& c = sc.c;
   c.subtitle = "share of the decided runs that perforated";
-  c.x = {varied_keys[0], ""};
-  for (const auto& k : scene_keys())
-    if (k.key == varied_keys[0]) c.x.unit = k.unit;
   c.y = {"perforation probability", ""};
   c.y.fixed_range = true;
   c.y.min = 0;
   c.y.max = 1;
-  std::map<std::string, size_t> series;
   for (const auto& g : groups) {
     std::string name;
     for (size_t k = 1; k < varied_keys.size(); ++k)
       name += (name.empty() ? "" : ", ") + varied_keys[k] + " = " + g.keys[k];
-    if (name.empty()) name = "perforation probability";
-    if (!series.count(name)) {
-      series[name] = c.series.size();
-      Series s;
-      s.name = name;
-      c.series.push_back(s);
-    }
-    Series& s = c.series[series[name]];
     double x;
     parse_number(g.keys[0], &x);
-    s.x.push_back(x);
-    s.y.push_back(g.decided ? double(g.perforated) / g.decided : NAN);
+    sc.point(name.empty() ? "perforation probability" : name, x, g.decided ? double(g.perforated) / g.decided : NAN);
   }
-  for (auto& s : c.series) {
-    std::vector<size_t> o(s.x.size());
-    for (size_t i = 0; i < o.size(); ++i) o[i] = i;
-    std::sort(o.begin(), o.end(), [&](size_t a, size_t b) { return s.x[a] < s.x[b]; });
-    Series u = s;
-    for (size_t i = 0; i < o.size(); ++i) u.x[i] = s.x[o[i]], u.y[i] = s.y[o[i]];
-    s = u;
-  }
+  t.chart = sc.sorted();
   return t;
 }
 

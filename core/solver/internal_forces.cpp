@@ -81,7 +81,7 @@ double InternalForces<Real>::feed_from_clamp(int e, Real len, bool zener, double
   const int g = model_.grip_of_elem[e];
   s_.grip_heat[size_t(g)] = 0;
   // Fed out past the clamp's depth, the yarn has left the clamp: no grip holds it.
-  const double fed_out = s_.grip_payout[size_t(g)], rest = model_.elem_rest[e] + fed_out;
+  const double fed_out = s_.grip_payout[size_t(g)], rest = elem_rest_now(model_, s_, e);
   const double grip = fed_out < model_.clamp_depth ? model_.grips[size_t(g)].force : 0.0;
   const LawAt held = law_at(e, len, rest, rest, zener, E);
   if (held.force <= grip || double(len) <= rest) return rest;
