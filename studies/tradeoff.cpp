@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -838,10 +839,29 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
     const std::string mine = scene_knob_value(scene, knob);
     if (mine.empty()) continue;
     double my_cost = NAN;
+    const ojson* my_row = nullptr;
     for (const auto& row : j["rows"])
       if (row.value("knob", std::string()) == knob && normalise(knob, row.value("value", std::string())) == mine)
-        my_cost = cost_of(row);
+        my_cost = cost_of(row), my_row = &row;
     if (!std::isfinite(my_cost)) continue;  // the run's own setting was not measured
+    // A setting is suggested for the results it keeps within the tolerance only if it puts no
+    // other result further off than the tolerance or than the run's own setting does: a
+    // coarse mesh whose perforation time happens to match but whose energy is 30 % off is not
+    // "the same answer, cheaper". An error that is not a number (outcome differs) counts as
+    // infinite.
+    auto error_of = [](const ojson& row, const std::string& q) {
+      if (!row.contains("errors") || !row["errors"].contains(q) || !row["errors"][q].is_number())
+        return std::numeric_limits<double>::infinity();
+      return row["errors"][q].get<double>();
+    };
+    auto no_worse = [&](const ojson& row) {
+      if (!row.contains("errors")) return false;
+      for (auto it = row["errors"].begin(); it != row["errors"].end(); ++it) {
+        const double e = error_of(row, it.key()), own = my_row ? error_of(*my_row, it.key()) : 0.0;
+        if (!(e <= std::max(tolerance, own))) return false;
+      }
+      return true;
+    };
     const ojson* best = nullptr;
     std::vector<std::string> best_q;
     for (const auto& row : j["rows"]) {
@@ -854,7 +874,7 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
       if (row.contains("errors"))
         for (auto it = row["errors"].begin(); it != row["errors"].end(); ++it)
           if (it.value().is_number() && it.value().get<double>() <= tolerance) qs.push_back(it.key());
-      if (qs.empty()) continue;
+      if (qs.empty() || !no_worse(row)) continue;
       if (!best || qs.size() > best_q.size() || (qs.size() == best_q.size() && c < cost_of(*best))) {
         best = &row;
         best_q = qs;
