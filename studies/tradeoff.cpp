@@ -847,18 +847,24 @@ std::vector<std::string> tradeoff_suggestions(const Scene& scene, const std::str
     // A setting is suggested for the results it keeps within the tolerance only if it puts no
     // other result further off than the tolerance or than the run's own setting does: a
     // coarse mesh whose perforation time happens to match but whose energy is 30 % off is not
-    // "the same answer, cheaper". An error that is not a number (outcome differs) counts as
-    // infinite.
+    // "the same answer, cheaper". An error that is not a number or is missing (outcome
+    // differs) counts as infinite; where the run's own setting has no finite error (its
+    // measured run diverged), the tolerance alone is the bound.
     auto error_of = [](const ojson& row, const std::string& q) {
       if (!row.contains("errors") || !row["errors"].contains(q) || !row["errors"][q].is_number())
         return std::numeric_limits<double>::infinity();
       return row["errors"][q].get<double>();
     };
     auto no_worse = [&](const ojson& row) {
-      if (!row.contains("errors")) return false;
-      for (auto it = row["errors"].begin(); it != row["errors"].end(); ++it) {
-        const double e = error_of(row, it.key()), own = my_row ? error_of(*my_row, it.key()) : 0.0;
-        if (!(e <= std::max(tolerance, own))) return false;
+      std::vector<std::string> qs;
+      for (const ojson* r : {&row, my_row})
+        if (r && r->contains("errors") && (*r)["errors"].is_object())
+          for (auto it = (*r)["errors"].begin(); it != (*r)["errors"].end(); ++it)
+            if (std::find(qs.begin(), qs.end(), it.key()) == qs.end()) qs.push_back(it.key());
+      if (qs.empty()) return false;
+      for (const auto& q : qs) {
+        const double own = error_of(*my_row, q);
+        if (!(error_of(row, q) <= std::max(tolerance, std::isfinite(own) ? own : tolerance))) return false;
       }
       return true;
     };

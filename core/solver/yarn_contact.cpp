@@ -866,9 +866,10 @@ inline void YarnContact<Real>::crossing_batch(int c0, int c1, Real alpha, bool f
     go[c - c0] = on[c - c0] && pass_normal(c, alpha, last, w[c - c0], g[c - c0], lb, out[c - c0]);
   // Friction (Eq 12-15) once per step, in the last pass, against the normal force of all the
   // step's passes: its Coulomb bound mu f_n then holds for the step. Applied in every pass
-  // with the pass's fraction alpha_n, a sliding contact took sum(alpha_n) mu f_n (2.8 at
-  // N = 4, 9.9 at N = 32) and a stuck one a spring 2.2 times stiffer at N = 4, so the
-  // results moved with N without converging (docs/MODEL.md §4). With one pass, as before.
+  // with the pass's fraction alpha_n, each pass bounded by the normal force so far, a
+  // sliding contact took up to sum(alpha_n) mu f_n (2.8 at N = 4, 9.9 at N = 32) and a stuck
+  // one a spring 2.2 times stiffer at N = 4, so the results moved with N without converging
+  // (docs/MODEL.md §4). With one pass, as before. (pass_friction's alpha is therefore 1.)
   if (!last) return;
   for (int c = c0; c < c1; ++c)
     if (go[c - c0]) friction_setup(c, w[c - c0], g[c - c0], lb, out[c - c0], fs[c - c0]);
@@ -1162,7 +1163,8 @@ RAVEL_INLINE void YarnContact<Real>::friction_setup(int c, const Window& w, cons
   for (int k = 0; k < 4; ++k) s.fwinv += double(r.fw[k] * r.fw[k]) * model_.inv_mass[r.fnode[k]];
 }
 
-// Stick or slip on each yarn, and the friction impulse of one pass (Eq 12-15).
+// Stick or slip on each yarn, and the friction impulse of the step (Eq 12-15; called in the
+// last pass only, alpha = 1).
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last, const FrictionSetup& s,
                                                    CrossingImpulse& r) {
