@@ -419,6 +419,45 @@ std::vector<std::pair<std::string, Chart>> sweep_charts(const Csv& results, cons
   return out;
 }
 
+void apply_repeats(std::vector<Vary>& vary, int repeats, std::map<std::string, std::string>* base_of) {
+  if (repeats < 1 || repeats > 1000)
+    throw StudyError("--repeats: expected a whole number from 1 to 1000, got " + std::to_string(repeats));
+  const auto it =
+      std::find_if(vary.begin(), vary.end(), [](const Vary& v) { return v.key == "projectile.velocity_mps"; });
+  if (it == vary.end())
+    throw StudyError(
+        "--repeats needs --vary projectile.velocity_mps=...: it runs each of those velocities N times, 1e-6 m/s "
+        "apart");
+  if (repeats > 1) *it = repeat_velocities(*it, repeats, base_of);
+}
+
+std::vector<std::string> write_perforation_outputs(const std::string& out_dir, const Csv& results,
+                                                   const std::vector<std::string>& varied_keys,
+                                                   const std::map<std::string, std::string>& base_of, int repeats,
+                                                   int* groups) {
+  std::vector<std::string> written;
+  if (groups) *groups = 0;
+  if (varied_keys.empty()) return written;
+  const std::string stem = out_dir + "/charts/perforation_probability_vs_" + varied_keys[0];
+  if (repeats <= 1) {
+    std::error_code ec;
+    std::filesystem::remove(out_dir + "/perforation.csv", ec);
+    for (const char* ext : {".png", ".svg", ".csv"}) std::filesystem::remove(stem + ext, ec);
+    return written;
+  }
+  if (results.rows.empty()) return written;
+  const PerforationTable table = perforation_table(results, varied_keys, base_of);
+  write_file_atomic(out_dir + "/perforation.csv", table.csv);
+  written.push_back(out_dir + "/perforation.csv");
+  if (groups) *groups = table.groups;
+  if (finite_point_count(table.chart) > 0) {
+    prepare_output_dir(out_dir + "/charts");
+    write_chart(table.chart, stem);
+    written.push_back(stem);
+  }
+  return written;
+}
+
 Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string, std::string>* base_of) {
   if (repeats < 1 || repeats > 1000)
     throw StudyError("--repeats " + std::to_string(repeats) + ": expected a whole number from 1 to 1000");
@@ -512,9 +551,9 @@ PerforationTable perforation_table(const Csv& results, const std::vector<std::st
   Chart& c = sc.c;
   c.subtitle = "share of the decided runs that perforated";
   c.y = {"perforation probability", ""};
-  c.y.fixed_range = true;
-  c.y.min = 0;
-  c.y.max = 1;
+  c.y.fixed_range = true;  // 0 and 1 a little inside the frame, where the points show
+  c.y.min = -0.05;
+  c.y.max = 1.05;
   for (const auto& g : groups) {
     std::string name;
     for (size_t k = 1; k < varied_keys.size(); ++k)

@@ -59,6 +59,10 @@ std::vector<Case> expand_cases(const std::vector<Vary>& vary);
 // N x 1e-6 m/s (their repeats would overlap) or N is outside [1, 1000].
 inline constexpr double kRepeatStep_mps = 1e-6;
 Vary repeat_velocities(const Vary& velocities, int repeats, std::map<std::string, std::string>* base_of);
+// `ravel sweep --repeats N` and the app's Sweep window: N from 1 to 1000, and with N > 1 the
+// --vary projectile.velocity_mps among `vary` repeated (repeat_velocities). Throws StudyError
+// naming the problem (N out of range, no velocity varied, overlapping repeats).
+void apply_repeats(std::vector<Vary>& vary, int repeats, std::map<std::string, std::string>* base_of);
 
 struct Shard {
   int index = 1, count = 1;  // 1-based: 1/1 = everything
@@ -188,6 +192,15 @@ struct PerforationTable {
 };
 PerforationTable perforation_table(const Csv& results, const std::vector<std::string>& varied_keys,
                                    const std::map<std::string, std::string>& base_of);
+// After a sweep into out_dir: with repeats > 1 (and some finished cases) perforation.csv and
+// charts/perforation_probability_vs_<varied_keys[0]>.{png,svg,csv}, written atomically; the
+// paths written are returned (the chart's as its stem) and *groups set. With repeats <= 1
+// those files are removed if a rerun with repeats left them: they would disagree with
+// results.csv.
+std::vector<std::string> write_perforation_outputs(const std::string& out_dir, const Csv& results,
+                                                   const std::vector<std::string>& varied_keys,
+                                                   const std::map<std::string, std::string>& base_of, int repeats,
+                                                   int* groups = nullptr);
 
 // The unit a results.csv column's name ends in ("energy_absorbed_J" -> "J", "_mps" -> "m/s";
 // "" for counts and ratios), and its words ("energy absorbed").

@@ -26,7 +26,8 @@ SweepRunner::Snapshot SweepRunner::snapshot() const {
   return state_;
 }
 
-bool SweepRunner::start(const SweepOptions& options, const std::vector<std::string>& vary_text, std::string* error) {
+bool SweepRunner::start(const SweepOptions& options, const std::vector<std::string>& vary_text, std::string* error,
+                        int repeats) {
   if (running()) {
     if (error) *error = "a sweep is already running";
     return false;
@@ -34,12 +35,14 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
   if (thread_.joinable()) thread_.join();
   std::vector<Vary> vary;
   std::vector<std::string> keys;
+  std::map<std::string, std::string> base_of;
   try {
     if (vary_text.empty()) throw StudyError("--vary: give at least one key to vary");
     for (const auto& v : vary_text) {
       vary.push_back(parse_vary(v, options.scene_path, options.overrides));
       keys.push_back(vary.back().key);
     }
+    if (repeats != 1) apply_repeats(vary, repeats, &base_of);
     load_scene(options.scene_path, options.overrides);
   } catch (const std::exception& e) {
     if (error) *error = e.what();
@@ -52,12 +55,14 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
     state_ = Snapshot{};
     state_.running = true;
     state_.varied_keys = keys;
+    state_.repeats = repeats;
+    state_.base_of = base_of;
     state_.progress.total = int(to_run.size());
     state_.results.header = {"case"};
     for (const auto& k : keys) state_.results.header.push_back(k);
   }
   interrupt_.store(false);
-  thread_ = std::thread([this, options, all, to_run, keys] {
+  thread_ = std::thread([this, options, all, to_run, keys, base_of, repeats] {
     SweepHooks hooks;
     // Called under the sweep's own lock, one at a time; ours is held only to copy.
     hooks.on_progress = [this](const SweepProgress& p) {
@@ -87,6 +92,11 @@ bool SweepRunner::start(const SweepOptions& options, const std::vector<std::stri
     std::string err;
     try {
       rep = run_sweep(all, to_run, options, keys, hooks, &interrupt_);
+      // The perforation probability (or the removal of a stale table), from results.csv as
+      // the command reads it; the app shows the same table from its own rows.
+      if (!rep.interrupted)
+        write_perforation_outputs(options.out_dir, parse_csv(read_text_file(options.out_dir + "/results.csv")), keys,
+                                  base_of, repeats);
     } catch (const std::exception& e) {
       err = e.what();
     }

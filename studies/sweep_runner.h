@@ -6,6 +6,7 @@
 #pragma once
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -26,6 +27,10 @@ class SweepRunner {
     std::string error;   // bad input or output error (not started / stopped)
     Csv results;         // one row per case done so far: case, varied keys, summary keys
     std::vector<std::string> varied_keys;
+    // Repeats (apply_repeats): each velocity run `repeats` times; base_of maps each run's
+    // velocity to the one it repeats (perforation_table groups by it).
+    int repeats = 1;
+    std::map<std::string, std::string> base_of;
     // Charts of `results` (energy absorbed, residual velocity vs the first varied key).
     std::vector<std::pair<std::string, Chart>> charts() const { return sweep_charts(results, varied_keys); }
   };
@@ -35,9 +40,11 @@ class SweepRunner {
   SweepRunner(const SweepRunner&) = delete;
   SweepRunner& operator=(const SweepRunner&) = delete;
 
-  // `vary` as on the command line ("key=start:stop:step" or "key=v1,v2"). Validates on the
-  // calling thread (returns false and sets *error, nothing started), then runs.
-  bool start(const SweepOptions& options, const std::vector<std::string>& vary, std::string* error);
+  // `vary` as on the command line ("key=start:stop:step" or "key=v1,v2"), `repeats` as
+  // `ravel sweep --repeats`. Validates on the calling thread (returns false and sets *error,
+  // nothing started), then runs; once finished, writes perforation.csv and its chart as the
+  // command does (write_perforation_outputs).
+  bool start(const SweepOptions& options, const std::vector<std::string>& vary, std::string* error, int repeats = 1);
   void cancel();
   bool running() const;
   Snapshot snapshot() const;

@@ -114,13 +114,7 @@ int cmd_sweep(const Args& args) {
       if (text.empty() || *end != 0 || n < 1 || n > 1000)
         throw UsageError("--repeats: expected a whole number from 1 to 1000, got '" + text + "'");
       repeats = int(n);
-      const auto it = std::find(keys.begin(), keys.end(), "projectile.velocity_mps");
-      if (it == keys.end())
-        throw UsageError(
-            "--repeats needs --vary projectile.velocity_mps=...: it runs each of those velocities N times, 1e-6 m/s "
-            "apart");
-      auto& vv = vary[size_t(it - keys.begin())];
-      if (repeats > 1) vv = studies::repeat_velocities(vv, repeats, &base_of);
+      studies::apply_repeats(vary, repeats, &base_of);
     }
     // The charts' x axis: the first --vary key unless --chart-x names another (cases keep their names).
     std::vector<std::string> chart_keys = keys;
@@ -199,24 +193,16 @@ int cmd_sweep(const Args& args) {
       studies::write_chart(chart, opt.out_dir + "/charts/" + stem);
       std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
     }
-    if (repeats <= 1) {  // a table or chart left from a rerun with --repeats would disagree with results.csv
-      std::error_code ec;
-      std::filesystem::remove(opt.out_dir + "/perforation.csv", ec);
-      for (const char* ext : {".png", ".svg", ".csv"})
-        std::filesystem::remove(opt.out_dir + "/charts/perforation_probability_vs_" + chart_keys[0] + ext, ec);
-    }
-    if (repeats > 1 && !results.rows.empty()) {
-      // The perforation probability per velocity (and per combination of the other keys).
-      const auto table = studies::perforation_table(results, chart_keys, base_of);
-      write_file_atomic(opt.out_dir + "/perforation.csv", table.csv);
-      std::printf("  %s/perforation.csv (%d rows of %d repeats)\n", opt.out_dir.c_str(), table.groups, repeats);
-      if (studies::finite_point_count(table.chart) > 0) {
-        prepare_output_dir(opt.out_dir + "/charts");
-        const std::string stem = "perforation_probability_vs_" + chart_keys[0];
-        studies::write_chart(table.chart, opt.out_dir + "/charts/" + stem);
-        std::printf("  %s/charts/%s.{png,svg,csv}\n", opt.out_dir.c_str(), stem.c_str());
-      }
-    }
+    // The perforation probability per velocity (and per combination of the other keys); a
+    // rerun without --repeats removes what one with it left (it would disagree with results.csv).
+    int groups = 0;
+    const auto written =
+        studies::write_perforation_outputs(opt.out_dir, results, chart_keys, base_of, repeats, &groups);
+    for (size_t i = 0; i < written.size(); ++i)
+      if (i == 0)
+        std::printf("  %s (%d rows of %d repeats)\n", written[i].c_str(), groups, repeats);
+      else
+        std::printf("  %s.{png,svg,csv}\n", written[i].c_str());
     if (rep.interrupted) return exit_interrupted;
     return rep.cases_failed ? exit_failure : exit_ok;
   } catch (const std::exception& e) {

@@ -14,8 +14,8 @@
 //                          range:LO:HI | range:auto, scrub:T_US, live, pick:ELEMENT_ID,
 //                          pick-crossing:ID, open:PATH, screenshot:FILE, export-results,
 //                          export-scene, export-vtk:DIR, record:DIR (image sequence),
-//                          sweep:KEY=LIST[;KEY=LIST], sweep-charts[:X_KEY], limit[:JOBS] (into --export-dir; JOBS runs
-//                          in flight), demo:NAME, continue, compare-exit
+//                          sweep:KEY=LIST[;KEY=LIST][;repeats=N], sweep-charts[:X_KEY], limit[:JOBS] (into
+//                          --export-dir; JOBS runs in flight), demo:NAME, continue, compare-exit
 //   --pause-at-us T        pause the run when simulated time reaches T; with --frames the
 //                          app keeps going past frame N until then (for reproducible pictures),
 //                          and until scripted exports and studies have finished
@@ -103,7 +103,8 @@ std::multimap<long, ScriptAction> parse_script(const std::vector<std::string>& i
           "--do: unknown action '" + a.action +
           "' (play, pause, step, reset, restart, clear, fast, slow:RATE, set:KEY=VALUE, view:NAME, "
           "field:NAME, colormap:NAME, range:LO:HI, scrub:T_US, live, pick:ID, pick-crossing:ID, open:PATH, "
-          "screenshot:FILE, export-results, export-scene, export-vtk:DIR, record:DIR, sweep:KEY=LIST[;KEY=LIST], "
+          "screenshot:FILE, export-results, export-scene, export-vtk:DIR, record:DIR, "
+          "sweep:KEY=LIST[;KEY=LIST][;repeats=N], "
           "sweep-charts[:X_KEY], limit, wait, demo:NAME, continue, compare-exit)");
     // Arguments that can be checked before the window opens.
     if ((a.action == "scrub" || a.action == "pick" || a.action == "pick-crossing") &&

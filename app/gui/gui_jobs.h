@@ -73,6 +73,7 @@ struct StudiesWindow {
   char vary[1024] = "projectile.velocity_mps=180:500:40";
   char sweep_dir[512] = "";
   int jobs = 1;
+  int repeats = 1;  // each velocity of a projectile.velocity_mps line run this many times (ravel sweep --repeats)
   std::string sweep_error;
   int chart_index = 0;
   std::string chart_x;  // the charts' x axis: a varied key ("" = the first), as `ravel sweep --chart-x`

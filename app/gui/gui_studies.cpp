@@ -145,7 +145,7 @@ bool start_sweep(GuiApp& app, const std::vector<std::string>& vary_lines) {
     o.scene_path = write_scene(app, o.out_dir + "/.scene");
     o.jobs = std::max(1, w.jobs);
     w.sweep_error.clear();
-    if (!w.sweep.start(o, vary_lines, &w.sweep_error)) return false;
+    if (!w.sweep.start(o, vary_lines, &w.sweep_error, w.repeats)) return false;
     app.notice = "sweep started into " + o.out_dir;
     app.notice_is_error = false;
     return true;
@@ -211,6 +211,12 @@ void sweep_window(GuiApp& app) {
   ImGui::InputTextMultiline("##vary", w.vary, sizeof w.vary, ImVec2(-1, ImGui::GetTextLineHeight() * 3.5f));
   ImGui::InputText("folder", w.sweep_dir, sizeof w.sweep_dir);
   ImGui::SliderInt("jobs", &w.jobs, 1, int(std::max(1u, std::thread::hardware_concurrency())));
+  ImGui::SetNextItemWidth(fs * 8);
+  if (ImGui::InputInt("repeats", &w.repeats)) w.repeats = std::clamp(w.repeats, 1, 1000);
+  help_marker(
+      "Near the ballistic limit one run is one draw of a random outcome. With repeats N each velocity of the "
+      "projectile.velocity_mps line is run N times, 1e-6 m/s apart, and the chart 'perforation probability' shows "
+      "the share that perforated (perforation.csv in the folder), as ravel sweep --repeats N does.");
   if (ImGui::Button("Start sweep")) start_sweep(app, lines_of(w.vary));
   ImGui::EndDisabled();
   if (s.running) {
@@ -239,7 +245,12 @@ void sweep_window(GuiApp& app) {
       ImGui::EndCombo();
     }
   }
-  const auto charts = studies::sweep_charts(s.results, sweep_chart_keys(w, s.varied_keys));
+  auto charts = studies::sweep_charts(s.results, sweep_chart_keys(w, s.varied_keys));
+  // With repeats: the perforation probability per velocity, first (the same table as perforation.csv).
+  if (s.repeats > 1 && !s.results.rows.empty()) {
+    studies::Chart p = studies::perforation_table(s.results, sweep_chart_keys(w, s.varied_keys), s.base_of).chart;
+    if (studies::finite_point_count(p) > 0) charts.insert(charts.begin(), {"perforation_probability", std::move(p)});
+  }
   if (!charts.empty()) {
     ImGui::BeginDisabled(s.running);
     if (ImGui::Button("Save charts")) write_sweep_charts(app);
@@ -422,14 +433,28 @@ bool write_scripted_sweep_charts(GuiApp& app, const std::string& x_key) {
 bool start_scripted_sweep(GuiApp& app, const std::string& vary) {
   StudiesWindow& w = *app.studies;
   w.show_sweep = true;
-  // Several keys: KEY=LIST;KEY=LIST (one line each in the window).
+  // Several keys: KEY=LIST;KEY=LIST (one line each in the window); repeats=N sets the
+  // window's repeats (ravel sweep --repeats N).
   std::vector<std::string> lines;
   std::string text;
+  w.repeats = 1;
   for (size_t a = 0; a <= vary.size();) {
     const size_t b = std::min(vary.find(';', a), vary.size());
-    if (b > a) lines.push_back(vary.substr(a, b - a));
-    text += (text.empty() ? "" : "\n") + vary.substr(a, b - a);
+    const std::string part = vary.substr(a, b - a);
     a = b + 1;
+    if (part.rfind("repeats=", 0) == 0) {
+      char* end = nullptr;
+      const long n = std::strtol(part.c_str() + 8, &end, 10);
+      if (*end != '\0' || n < 1 || n > 1000) {
+        app.notice = "sweep: repeats must be a whole number from 1 to 1000, got '" + part.substr(8) + "'";
+        app.notice_is_error = true;
+        return false;
+      }
+      w.repeats = int(n);
+      continue;
+    }
+    if (!part.empty()) lines.push_back(part);
+    text += (text.empty() ? "" : "\n") + part;
   }
   std::snprintf(w.vary, sizeof w.vary, "%s", text.c_str());
   const bool ok = start_sweep(app, lines);

@@ -189,6 +189,35 @@ print("the app's sweep equals ravel sweep:", [r["residual_velocity_mps"] for r i
 EOF
   ;;
 
+sweep-repeats)
+  # Repeats from the Sweep window (ravel sweep --repeats): the same runs, perforation.csv and
+  # perforation-probability chart as the command, and the chart shown in the window.
+  run_gui 1280 720 --frames 8 --paused --export-dir "$out/app" \
+    --do "2:sweep:projectile.velocity_mps=450,500;repeats=2" --do 3:wait --do "4:screenshot:$out/repeats.png"
+  cat log.txt
+  [ "$rc" -eq 0 ] || fail "the app exited $rc"
+  [ -s app/sweep/perforation.csv ] || fail "the sweep panel with repeats wrote no perforation.csv"
+  "$ravel" sweep --vary projectile.velocity_mps=450,500 --repeats 2 --jobs 1 --out "$out/cli" --quiet >/dev/null
+  cmp app/sweep/perforation.csv cli/perforation.csv || fail "perforation.csv differs from ravel sweep --repeats 2"
+  f=perforation_probability_vs_projectile.velocity_mps
+  cmp "app/sweep/charts/$f.csv" "cli/charts/$f.csv" || fail "charts/$f.csv differs from ravel sweep --repeats 2"
+  "$python" - app/sweep/perforation.csv app/sweep/results.csv <<'EOF3'
+import csv, sys
+t = list(csv.DictReader(open(sys.argv[1])))
+r = list(csv.DictReader(open(sys.argv[2])))
+if len(r) != 4:
+    raise SystemExit(f"FAIL: {len(r)} runs, expected 2 velocities x 2 repeats")
+if [row["runs"] for row in t] != ["2", "2"]:
+    raise SystemExit(f"FAIL: runs per velocity {[row['runs'] for row in t]}, expected 2 and 2")
+print("the app's repeats equal ravel sweep --repeats:", [(row["projectile.velocity_mps"], row["perforation_probability"]) for row in t])
+EOF3
+  [ -s repeats.png ] || fail "no screenshot"
+  # A bad repeats count is refused with its value named, and nothing is run.
+  run_gui 1280 720 --frames 4 --paused --export-dir "$out/bad" --do "2:sweep:projectile.velocity_mps=450;repeats=0"
+  cat log.txt err.txt | grep -q "repeats must be a whole number from 1 to 1000, got '0'" || fail "repeats=0 was not refused by name"
+  [ ! -e bad/sweep/results.csv ] || fail "a refused sweep ran"
+  ;;
+
 sweep-x)
   vary="projectile.velocity_mps=450,500;yarn.friction=0.1,0.3"
   run_gui 1280 720 --frames 8 --paused --export-dir "$out/app" --do "2:sweep:$vary" --do 3:wait \
