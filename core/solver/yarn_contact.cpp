@@ -175,7 +175,7 @@ struct YarnContact {
   void friction_setup(int c, const Window& w, const ContactGeom& g, const lanes::ClosestBatch& lb, CrossingImpulse& r,
                       FrictionSetup& s);
 
-  void pass_friction(int c, Real alpha, bool last, const FrictionSetup& s, CrossingImpulse& r);
+  void pass_friction(int c, const FrictionSetup& s, CrossingImpulse& r);
 
   enum : std::uint8_t { ev_skip = 1, ev_ravel = 2, ev_pass = 4, ev_lost = 8, ev_separated = 16 };
 };
@@ -869,12 +869,12 @@ inline void YarnContact<Real>::crossing_batch(int c0, int c1, Real alpha, bool f
   // with the pass's fraction alpha_n, each pass bounded by the normal force so far, a
   // sliding contact took up to sum(alpha_n) mu f_n (2.8 at N = 4, 9.9 at N = 32) and a stuck
   // one a spring 2.2 times stiffer at N = 4, so the results moved with N without converging
-  // (docs/MODEL.md §4). With one pass, as before. (pass_friction's alpha is therefore 1.)
+  // (docs/MODEL.md §4). With one pass, as before.
   if (!last) return;
   for (int c = c0; c < c1; ++c)
     if (go[c - c0]) friction_setup(c, w[c - c0], g[c - c0], lb, out[c - c0], fs[c - c0]);
   for (int c = c0; c < c1; ++c)
-    if (go[c - c0]) pass_friction(c, alpha, last, fs[c - c0], out[c - c0]);
+    if (go[c - c0]) pass_friction(c, fs[c - c0], out[c - c0]);
 }
 
 // Normal correction of one tracked crossing in one pass, given its window and closest
@@ -1164,10 +1164,9 @@ RAVEL_INLINE void YarnContact<Real>::friction_setup(int c, const Window& w, cons
 }
 
 // Stick or slip on each yarn, and the friction impulse of the step (Eq 12-15; called in the
-// last pass only, alpha = 1).
+// last pass, which applies its corrections in full), with the step's friction state.
 template <class Real>
-RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last, const FrictionSetup& s,
-                                                   CrossingImpulse& r) {
+RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, const FrictionSetup& s, CrossingImpulse& r) {
   const Crossing& cr = model_.crossings[c];
   const Real dt = Real(model_.dt);
   const double fwinv = s.fwinv;
@@ -1199,16 +1198,14 @@ RAVEL_INLINE void YarnContact<Real>::pass_friction(int c, Real alpha, bool last,
   if (ft_w != 0 || ft_f != 0) {
     // Force on the warp along its tangent, reaction on the weft; and vice versa (Eq 15).
     const V3 Fwarp = Real(ft_w) * s.Tw - Real(ft_f) * s.Tf;
-    r.F = -alpha * dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
+    r.F = -dt * Fwarp;  // impulse on the weft point; the warp gets the reaction
     r.has_f = true;
     s_.cr[c].ft = double(Fwarp.norm());
   }
-  if (last) {
-    s_.cr[c].sliding = slid;
-    s_.cr[c].slip = moved / double(dt);
-    s_.cr[c].fn = fn;
-    s_.cr[c].stick_e = stored;
-  }
+  s_.cr[c].sliding = slid;
+  s_.cr[c].slip = moved / double(dt);
+  s_.cr[c].fn = fn;
+  s_.cr[c].stick_e = stored;
 }
 
 // The interpenetration left at the end of a step (after every correction), sampled every
