@@ -201,6 +201,18 @@ std::vector<std::string> wrap_text(const Painter& p, const std::string& text, do
   return lines;
 }
 
+// The y title, rotated, along the chart's left edge centred on the plot (mid). On a short
+// chart (a panel in the app) a long title would spill past the chart's top and be cut: it
+// shrinks to the chart's height (down to 0.6 of the font) and moves off the plot's middle
+// only as far as it must to stay inside [Y, Y + H] (centred on the chart if even then too long).
+void y_title(Painter& p, const std::string& title, double X, double Y, double H, double mid, double fs, Rgb ink) {
+  const double room = H - 0.6 * fs, full = p.text_width(title, fs);
+  const double size = full > room && full > 0 ? std::max(0.6 * fs, fs * room / full) : fs;
+  const double half = 0.5 * p.text_width(title, size);
+  mid = 2 * half < room ? std::clamp(mid, Y + 0.3 * fs + half, Y + H - 0.3 * fs - half) : Y + H / 2;
+  p.text(X + 0.9 * fs, mid, title, size, ink, 1, true);
+}
+
 // A categorical grid chart (Chart::grid): cells, row and column labels, a legend of the
 // categories. Same fonts and margins as the x-y charts.
 void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double W, double H, double fs) {
@@ -241,7 +253,7 @@ void draw_grid_chart(const Chart& chart, Painter& p, double X, double Y, double 
   for (size_t yi = 0; yi < ny; ++yi)
     p.text(left - 0.7 * fs, bottom - (yi + 0.5) * ch, g.y_labels[yi], fs, ink, 2, false);
   p.text((left + right) / 2, bottom + 2.5 * fs, chart.x.title(), fs, ink, 1, false);
-  p.text(X + 0.9 * fs, (top + bottom) / 2, chart.y.title(), fs, ink, 1, true);
+  y_title(p, chart.y.title(), X, Y, H, (top + bottom) / 2, fs, ink);
   p.rect_outline(left, top, right, bottom, frame, 1);
   if (legend_w > 0) {
     double ly = top + 0.8 * fs;
@@ -317,7 +329,7 @@ void draw_chart(const Chart& chart, Painter& p, double X, double Y, double W, do
     p.text(left - 0.7 * fs, py(v), ylabel(v), fs, ink, 2, false);
   }
   p.text((left + right) / 2, bottom + 2.5 * fs, chart.x.title(), fs, ink, 1, false);
-  p.text(X + 0.9 * fs, (top + bottom) / 2, chart.y.title(), fs, ink, 1, true);
+  y_title(p, chart.y.title(), X, Y, H, (top + bottom) / 2, fs, ink);
 
   p.clip(left, top, right, bottom);
   for (size_t k = 0; k < chart.series.size(); ++k) {

@@ -58,14 +58,21 @@ class ImGuiPainter : public Painter {
   }
 
  private:
-  // Rotate the glyph quads ImGui just emitted by 90 degrees about (x, y).
+  // Rotate the glyph quads ImGui just emitted by 90 degrees about (x, y). ImGui drops glyphs
+  // that lie outside the clip rectangle as laid out, before they are turned: a title centred
+  // on an axis near the window's left edge lost its first letters ("y absorbed (J)"). So the
+  // line is laid out where it lies inside the clip rectangle and moved as it is turned.
   void draw_vertical(double x, double y, const std::string& s, double size, Rgb c) {
     const ImVec2 ts = ImGui::GetFont()->CalcTextSizeA(float(size), 1e9f, 0, s.c_str());
+    const ImVec2 lo = dl_->GetClipRectMin(), hi = dl_->GetClipRectMax();
+    const float want_x = float(x - ts.x / 2), want_y = float(y - ts.y / 2);
+    const float at_x = std::max(lo.x, std::min(want_x, hi.x - ts.x));
+    const float at_y = std::max(lo.y, std::min(want_y, hi.y - ts.y));
     const int start = dl_->VtxBuffer.Size;
-    dl_->AddText(ImGui::GetFont(), float(size), ImVec2(float(x - ts.x / 2), float(y - ts.y / 2)), to_u32(c), s.c_str());
+    dl_->AddText(ImGui::GetFont(), float(size), ImVec2(at_x, at_y), to_u32(c), s.c_str());
     for (int i = start; i < dl_->VtxBuffer.Size; ++i) {
       ImVec2& p = dl_->VtxBuffer[i].pos;
-      const float dx = p.x - float(x), dy = p.y - float(y);
+      const float dx = p.x + (want_x - at_x) - float(x), dy = p.y + (want_y - at_y) - float(y);
       p = ImVec2(float(x) + dy, float(y) - dx);  // counter-clockwise on screen
     }
   }

@@ -205,5 +205,43 @@ TEST(Chart, LongLegendEntriesWrapInsideTheChart) {
   }
 }
 
+// The rotated y title of a short chart (a panel in the app, 150 px high) is longer than the
+// chart at the base font: it shrinks to the chart's height and stays inside it. On a chart of
+// the default size the same title keeps the base font, centred on the plot.
+TEST(Chart, LongYTitleFitsAShortChart) {
+  Chart c;
+  c.title = "friction work";
+  c.x.label = "yarn.friction";
+  c.y.label = "friction work up to perforation";
+  c.y.unit = "J";
+  Series s;
+  s.x = {0, 0.5, 1};
+  s.y = {0, 31, 5};
+  c.series.push_back(s);
+  auto vertical = [&](int w, int h, double* y, double* size) {
+    const std::string svg = chart_svg(c, w, h);
+    const size_t at = svg.find("rotate(-90");
+    ASSERT_NE(at, std::string::npos);
+    const size_t open = svg.rfind("<text", at);
+    auto attr = [&](const std::string& name) {
+      const size_t k = svg.find(" " + name + "=\"", open);
+      return std::stod(svg.substr(k + name.size() + 3));
+    };
+    *y = attr("y");
+    *size = attr("font-size");
+  };
+  // Per pixel of font size, as the SVG painter measures text (Painter::text_width's 0.6 em).
+  const double width = 0.6 * double(c.y.title().size());
+  double y, size;
+  vertical(400, 150, &y, &size);
+  EXPECT_LT(size, 9.0);  // below the base font (9 px at this height): it had to shrink
+  EXPECT_GE(y - 0.5 * width * size, 0.0);
+  EXPECT_LE(y + 0.5 * width * size, 150.0);
+  vertical(900, 600, &y, &size);
+  EXPECT_DOUBLE_EQ(size, 15.0);  // the base font H / 40
+  EXPECT_GE(y - 0.5 * width * size, 0.0);
+  EXPECT_LE(y + 0.5 * width * size, 600.0);
+}
+
 }  // namespace
 }  // namespace ravel::studies
