@@ -1,4 +1,7 @@
 // Stage internal_forces (Eq 3, 23-25): element strain -> stress, failure, bending, nodal forces.
+#include <cstdint>
+#include <cstring>
+
 #include "solver/simd/element_lanes.h"
 #include "solver/stage.h"
 
@@ -112,6 +115,10 @@ inline bool InternalForces<Real>::element_one(int e, bool zener, double E, doubl
     return false;
   }
   const V3 dx = s_.x[model_.elem_b[e]] - s_.x[model_.elem_a[e]];
+  if (!ctx_.elem_mid.empty()) {  // the midpoint for the bending lanes (bend4's operations)
+    const V3 mid = Real(0.5) * (s_.x[model_.elem_a[e]] + s_.x[model_.elem_b[e]]);
+    for (int m = 0; m < 3; ++m) ctx_.elem_mid[size_t(m) * size_t(model_.element_count) + size_t(e)] = double(mid[m]);
+  }
   const Real len = dx.norm();
   const double rest = model_.grip_of_elem.empty() || model_.grip_of_elem[e] < 0 ? model_.elem_rest[e]
                                                                                 : feed_from_clamp(e, len, zener, E);
@@ -210,20 +217,16 @@ void InternalForces<Real>::run() {
   // taken in element order either way.
   const bool use_lanes = zener && ctx_.simd;
   const int ng = (ne + kBatch - 1) / kBatch;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : stored, diss, released, nbroke, damp) \
+  // (One parallel region with the batch's constants set once per thread, then the groups:
+  // the same static split and sums as a parallel loop; setting the whole batch per group
+  // was a fifth of the pin-jointed model's step in instructions.)
+#pragma omp parallel num_threads(ctx_.threads) reduction(+ : stored, diss, released, nbroke, damp) \
   reduction(max : max_strain) if (ctx_.threads > 1)
-  for (int grp = 0; grp < ng; ++grp) {
-    const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
+  {
+    [[maybe_unused]] lanes::ElementBatch b;
     if constexpr (std::is_same_v<Real, double>) {
-      bool intact = use_lanes && e1 - e0 == kBatch;
-      for (int e = e0; e < e1 && intact; ++e) intact = !s_.broken_flag[e] && !(gripped && model_.grip_of_elem[e] >= 0);
-      if (intact) {
-        lanes::ElementBatch b;
+      if (use_lanes) {
         b.x = s_.x[0].data();
-        b.a = &model_.elem_a[e0];
-        b.b = &model_.elem_b[e0];
-        b.rest = &model_.elem_rest[e0];
-        b.area = &model_.elem_area[e0];
         b.k1 = ctx_.zener.c.k1, b.k2 = ctx_.zener.c.k2, b.mu = ctx_.zener.c.mu;
         b.dt = ctx_.zener.dt, b.inv_dt = ctx_.zener.inv_dt, b.lam = ctx_.zener.lam, b.g = ctx_.zener.g;
         b.decay = ctx_.zener.decay, b.slack_decay = ctx_.zener.slack_decay;
@@ -234,27 +237,49 @@ void InternalForces<Real>::run() {
         b.crimp_fraction = model_.crimp_fraction;
         b.crimp_width = model_.crimp_width;
         b.crimp_damping_k = ctx_.crimp_damping_k;
-        b.crimp_damp_stress = ctx_.crimp_damping_k > 0 ? &s_.crimp_damp_stress[e0] : nullptr;
-        b.prev_strain = &s_.prev_strain[e0];
-        b.ev = &s_.ev[e0];
-        b.strain = &s_.strain[e0];
-        b.stress = &s_.stress[e0];
-        b.energy = &s_.elem_energy[e0];
-        b.force = s_.elem_force[e0].data();
-        if (lanes::zener4(b)) {
-          for (int l = 0; l < kBatch; ++l) {
-            diss += b.dd[l];
-            damp += b.dw[l];
-            if (ctx_.crimp_damping_k > 0) damp += b.cw[l];  // (element_one adds it after the snap damping's)
-            stored += b.u[l];
-            max_strain = std::max(max_strain, b.eps[l]);
-          }
-          continue;
-        }
+        b.mid_stride = ne;
       }
     }
-    for (int e = e0; e < e1; ++e)
-      nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain, damp);
+#pragma omp for schedule(static)
+    for (int grp = 0; grp < ng; ++grp) {
+      const int e0 = grp * kBatch, e1 = std::min(ne, e0 + kBatch);
+      if constexpr (std::is_same_v<Real, double>) {
+        // A whole group, none of it broken (four flag bytes at once) or fed from a clamp.
+        bool intact = use_lanes && e1 - e0 == kBatch;
+        if (intact) {
+          std::uint32_t flags;
+          std::memcpy(&flags, &s_.broken_flag[e0], sizeof flags);
+          intact = flags == 0;
+          for (int e = e0; e < e1 && intact && gripped; ++e) intact = model_.grip_of_elem[e] < 0;
+        }
+        if (intact) {
+          b.a = &model_.elem_a[e0];
+          b.b = &model_.elem_b[e0];
+          b.rest = &model_.elem_rest[e0];
+          b.area = &model_.elem_area[e0];
+          b.crimp_damp_stress = ctx_.crimp_damping_k > 0 ? &s_.crimp_damp_stress[e0] : nullptr;
+          b.prev_strain = &s_.prev_strain[e0];
+          b.ev = &s_.ev[e0];
+          b.strain = &s_.strain[e0];
+          b.stress = &s_.stress[e0];
+          b.energy = &s_.elem_energy[e0];
+          b.force = s_.elem_force[e0].data();
+          b.mid = ctx_.elem_mid.empty() ? nullptr : &ctx_.elem_mid[size_t(e0)];
+          if (lanes::zener4(b)) {
+            for (int l = 0; l < kBatch; ++l) {
+              diss += b.dd[l];
+              damp += b.dw[l];
+              if (ctx_.crimp_damping_k > 0) damp += b.cw[l];  // (element_one adds it after the snap damping's)
+              stored += b.u[l];
+              max_strain = std::max(max_strain, b.eps[l]);
+            }
+            continue;
+          }
+        }
+      }
+      for (int e = e0; e < e1; ++e)
+        nbroke += element_one(e, zener, E, fail, breakable, stored, diss, released, max_strain, damp);
+    }
   }
   // Count failures serially to keep the count per family (only in a step with one).
   for (int e = 0; e < ne && nbroke > 0; ++e) {
@@ -325,34 +350,56 @@ void InternalForces<Real>::run() {
   // order either way (a spring apart adds nothing: its energy is +0).
   const int nbg = (nbend + kBatch - 1) / kBatch;
   const bool bend_lanes = std::is_same_v<Real, double> && ctx_.simd;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : bend_stored, bend_released) \
-  if (ctx_.threads > 1)
-  for (int grp = 0; grp < nbg; ++grp) {
-    const int s0 = grp * kBatch, s1 = std::min(nbend, s0 + kBatch);
+#pragma omp parallel num_threads(ctx_.threads) reduction(+ : bend_stored, bend_released) if (ctx_.threads > 1)
+  {
+    [[maybe_unused]] lanes::BendBatch b;
     if constexpr (std::is_same_v<Real, double>) {
-      bool regular = bend_lanes && s1 - s0 == kBatch;
-      for (int s = s0; s < s1 && regular; ++s) {
-        const int e1 = model_.bend_e1[s], e2 = model_.bend_e2[s];
-        regular = !s_.broken_flag[e1] && !s_.broken_flag[e2] && model_.bend_mirror[s] < 0;
-      }
-      if (regular) {
-        lanes::BendBatch b;
-        b.x = s_.x[0].data();
-        for (int l = 0; l < kBatch; ++l) {
-          const int e1 = model_.bend_e1[s0 + l], e2 = model_.bend_e2[s0 + l];
-          b.a1[l] = model_.elem_a[e1], b.b1[l] = model_.elem_b[e1];
-          b.a2[l] = model_.elem_a[e2], b.b2[l] = model_.elem_b[e2];
-        }
-        b.rest = &model_.bend_rest[s0];
-        b.k = &model_.bend_k[s0];
-        b.force = s_.bend_force[s0].data();
-        b.energy = &s_.bend_energy[s0];
-        lanes::bend4(b);
-        for (int l = 0; l < kBatch; ++l) bend_stored += b.held[l];
-        continue;
-      }
+      b.x = s_.x[0].data();
+      b.mid_stride = ne;
     }
-    for (int s = s0; s < s1; ++s) bend_one(s, bend_stored, bend_released);
+#pragma omp for schedule(static)
+    for (int grp = 0; grp < nbg; ++grp) {
+      const int s0 = grp * kBatch, s1 = std::min(nbend, s0 + kBatch);
+      if constexpr (std::is_same_v<Real, double>) {
+        if (bend_lanes && s1 - s0 == kBatch) {
+          // Four springs between consecutive elements of one yarn (Context::bend_along, the
+          // common case): intact when those five elements are (their flag bytes at once); they
+          // read the element stage's midpoints. Other groups: spring by spring.
+          const int first = model_.bend_e1[s0];
+          bool regular;
+          const bool along = ctx_.bend_along[size_t(grp)];
+          if (along) {
+            std::uint32_t flags;
+            std::memcpy(&flags, &s_.broken_flag[first], sizeof flags);
+            regular = flags == 0 && !s_.broken_flag[first + kBatch];
+          } else {
+            regular = true;
+            for (int sp = s0; sp < s1 && regular; ++sp) {
+              const int e1 = model_.bend_e1[sp], e2 = model_.bend_e2[sp];
+              regular = !s_.broken_flag[e1] && !s_.broken_flag[e2] && model_.bend_mirror[sp] < 0;
+            }
+          }
+          if (regular) {
+            b.mid = along ? ctx_.elem_mid.data() : nullptr;
+            b.e1 = first;
+            if (!along)
+              for (int l = 0; l < kBatch; ++l) {
+                const int e1 = model_.bend_e1[s0 + l], e2 = model_.bend_e2[s0 + l];
+                b.a1[l] = model_.elem_a[e1], b.b1[l] = model_.elem_b[e1];
+                b.a2[l] = model_.elem_a[e2], b.b2[l] = model_.elem_b[e2];
+              }
+            b.rest = &model_.bend_rest[s0];
+            b.k = &model_.bend_k[s0];
+            b.force = s_.bend_force[s0].data();
+            b.energy = &s_.bend_energy[s0];
+            lanes::bend4(b);
+            for (int l = 0; l < kBatch; ++l) bend_stored += b.held[l];
+            continue;
+          }
+        }
+      }
+      for (int sp = s0; sp < s1; ++sp) bend_one(sp, bend_stored, bend_released);
+    }
   }
   // Gather, and with each node's force the free update of Eq 1-2 (stage.h: free_update).
   const int n = model_.node_count;
@@ -360,8 +407,15 @@ void InternalForces<Real>::run() {
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(max : max_r2) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     V3 f = V3::Zero();
-    for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k)
-      f += ctx_.inc_e[k].second * s_.elem_force[ctx_.inc_e[k].first];
+    // (+1 F is F and -1 F is -F exactly, and f + (-F) is f - F: the same sums as weighing each
+    // element force by its sign, without the multiplications)
+    for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k) {
+      const int c = ctx_.inc_e_signed[k];
+      if (c >= 0)
+        f += s_.elem_force[c];
+      else
+        f -= s_.elem_force[~c];
+    }
     for (int k = ctx_.inc_b_off[i]; k < ctx_.inc_b_off[i + 1]; ++k)
       f += ctx_.inc_b[k].second * s_.bend_force[ctx_.inc_b[k].first];
     s_.f[i] = f;

@@ -121,6 +121,10 @@ void Book<Real>::finish_step() {
   double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0, w_compress = 0;
   const int n = model_.node_count;
   ctx_.shift_flag.resize(n);
+  // Yarn-yarn friction and compression act only where yarns cross and slide (the sliding
+  // model); the pin-jointed net has no crossings, and their velocity changes stay zero.
+  const bool yarn_contact = !model_.crossings.empty();
+  const bool compress = ctx_.compressible && yarn_contact;
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (ctx_.threads > 1)
   for (int i = 0; i < n; ++i) {
     const double hm = 0.5 * model_.mass[i];
@@ -128,11 +132,13 @@ void Book<Real>::finish_step() {
     const V3 vsum = s_.v_prev[i] + s_.v[i];
     auto& c = s_.corr[i];
     w_contact += hm * double(c.dv_contact.dot(vsum));
-    w_friction += hm * double(c.dv_friction.dot(vsum));
     ctx_.shift_flag[i] = c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0);
     c.dv_contact.setZero();  // ready for the next step's corrections
-    c.dv_friction.setZero();
-    if (ctx_.compressible) {
+    if (yarn_contact) {
+      w_friction += hm * double(c.dv_friction.dot(vsum));
+      c.dv_friction.setZero();
+    }
+    if (compress) {
       w_compress += hm * double(c.dv_compress.dot(vsum));
       c.dv_compress.setZero();
     }

@@ -83,6 +83,20 @@ Context<Real>::Context(const Model& model)
       damping_k(model.element_damping_beta * model.modulus_inst),
       crimp_damping_k(model.crimp_damping_beta * model.modulus_inst) {
   const int n = model.node_count;
+  if (simd) elem_mid.assign(3 * size_t(model.element_count), 0.0);
+  const int nbend = int(model.bend_k.size());
+  const int kBatch = lanes::kWidth;  // (internal_forces: groups of this many springs)
+  bend_along.assign(size_t((nbend + kBatch - 1) / kBatch), 0);
+  for (int s0 = 0; simd && s0 + kBatch <= nbend; s0 += kBatch) {
+    const int first = model.bend_e1[size_t(s0)];
+    bool along = first + kBatch < model.element_count;
+    for (int l = 0; l < kBatch && along; ++l) {
+      const size_t sp = size_t(s0 + l);
+      along = model.bend_e1[sp] == first + l && model.bend_e2[sp] == first + l + 1 && model.bend_mirror[sp] < 0 &&
+              model.elem_yarn[size_t(first + l)] == model.elem_yarn[size_t(first + l + 1)];
+    }
+    bend_along[size_t(s0 / kBatch)] = along;
+  }
   std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
   for (int e = 0; e < model.element_count; ++e) {
     ne[model.elem_b[e]].push_back({e, Real(1)});  // element force acts on b, -force on a
@@ -111,7 +125,7 @@ Context<Real>::Context(const Model& model)
   for (int i = 0; i < n; ++i) {
     inc_e_off[i + 1] = inc_e_off[i] + int(ne[i].size());
     inc_b_off[i + 1] = inc_b_off[i] + int(nb[i].size());
-    for (auto& p : ne[i]) inc_e.push_back(p);
+    for (auto& p : ne[i]) inc_e.push_back(p), inc_e_signed.push_back(p.second > 0 ? p.first : ~p.first);
     for (auto& p : nb[i]) inc_b.push_back(p);
   }
 }

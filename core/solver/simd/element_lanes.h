@@ -32,6 +32,10 @@ struct ElementBatch {
   // (becomes this step's), the viscous strain; out: strain, stress, stored energy and the
   // force on node b (x y z per element).
   double *prev_strain, *ev, *strain, *stress, *energy, *force;
+  // Out (optional): the elements' midpoints, 0.5 (x_a + x_b), for the bending springs (bend4):
+  // x, y and z in three blocks `mid_stride` apart, at element e0 (null: not wanted).
+  double* mid = nullptr;
+  int mid_stride = 0;
   // Out, per lane, for the solver's sums (taken in element order): stored energy, energy
   // dissipated by the dashpot over the step, strain.
   // (dw: the snap damping's work; cw: the crimp damping's, added after it as element_one does)
@@ -45,6 +49,11 @@ struct BendBatch {
   // rest distances and stiffnesses (pointers to spring s0 of the model's arrays, as the next four).
   const double* x;
   int a1[kWidth], b1[kWidth], a2[kWidth], b2[kWidth];
+  // Or, for four springs between consecutive elements e1 .. e1 + 4 of one yarn (spring l
+  // joins e1 + l and e1 + l + 1), the midpoints zener4 / element_one kept this step (blocks
+  // as ElementBatch::mid; null: from the node positions, through a1 .. b2).
+  const double* mid = nullptr;
+  int mid_stride = 0, e1 = 0;
   const double *rest, *k;
   // Out: the force on the second midpoint (x y z per spring) and the stored energy, per
   // spring (pointers to spring s0 of the solver's arrays), and the energies in lane order.
