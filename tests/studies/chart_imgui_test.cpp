@@ -44,6 +44,7 @@ class ChartImgui : public ::testing::Test {
  protected:
   void SetUp() override {
     ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini left in the working folder
     unsigned char* pixels;
     int w, h;
     ImGui::GetIO().Fonts->GetTexDataAsAlpha8(&pixels, &w, &h);  // builds the font atlas
