@@ -410,7 +410,7 @@ void InternalForces<Real>::run() {
     // (+1 F is F and -1 F is -F exactly, and f + (-F) is f - F: the same sums as weighing each
     // element force by its sign, without the multiplications)
     auto element = [&](int k) {
-      const int c = ctx_.inc_e_signed[k];
+      const int c = ctx_.inc_e[k];
       if (c >= 0)
         f += s_.elem_force[c];
       else

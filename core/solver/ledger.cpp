@@ -80,7 +80,7 @@ RAVEL_INLINE double Book<Real>::shift_energy() {
   double du = 0;
   for (const int i : s_.shifted) {
     for (int k = ctx_.inc_e_off[i]; k < ctx_.inc_e_off[i + 1]; ++k) {
-      const int e = ctx_.inc_e[k].first;
+      const int e = ctx_.inc_e[k] >= 0 ? ctx_.inc_e[k] : ~ctx_.inc_e[k];
       if (s_.elem_mark[e] == s_.mark || s_.broken_flag[e]) continue;
       s_.elem_mark[e] = s_.mark;
       const int a = model_.elem_a[e], b = model_.elem_b[e];

@@ -97,10 +97,11 @@ Context<Real>::Context(const Model& model)
     }
     bend_along[size_t(s0 / kBatch)] = along;
   }
-  std::vector<std::vector<std::pair<int, Real>>> ne(n), nb(n);
+  std::vector<std::vector<int>> ne(n);
+  std::vector<std::vector<std::pair<int, Real>>> nb(n);
   for (int e = 0; e < model.element_count; ++e) {
-    ne[model.elem_b[e]].push_back({e, Real(1)});  // element force acts on b, -force on a
-    ne[model.elem_a[e]].push_back({e, Real(-1)});
+    ne[model.elem_b[e]].push_back(e);  // element force acts on b, -force on a
+    ne[model.elem_a[e]].push_back(~e);
   }
   for (size_t s = 0; s < model.bend_k.size(); ++s) {
     // Spring pushes midpoint 2 by +F and midpoint 1 by -F; half to each end node.
@@ -125,7 +126,7 @@ Context<Real>::Context(const Model& model)
   for (int i = 0; i < n; ++i) {
     inc_e_off[i + 1] = inc_e_off[i] + int(ne[i].size());
     inc_b_off[i + 1] = inc_b_off[i] + int(nb[i].size());
-    for (auto& p : ne[i]) inc_e.push_back(p), inc_e_signed.push_back(p.second > 0 ? p.first : ~p.first);
+    for (int c : ne[i]) inc_e.push_back(c);
     for (auto& p : nb[i]) inc_b.push_back(p);
   }
 }

@@ -72,21 +72,23 @@ struct Context {
   bool simd = false;  // lanes in use (contact_lanes.h, element_lanes.h): asked for, double, the processor has them
   ZenerStepper zener;
   bool compressible = false;  // crossings have a transverse-compression law
-  // Node -> (element, sign) and node -> (bending spring, weight), in CSR form.
+  // Node -> element and node -> bending spring, in CSR form:
   std::vector<int> inc_e_off, inc_b_off;
+  // node -> element: e where the node is the element's b (its force +F), ~e where it is its a
+  // (-F); node -> (bending spring, weight +-1/2, or 1/2 for a mirror spring).
+  std::vector<int> inc_e;
+  std::vector<std::pair<int, Real>> inc_b;
+  // Per group of kBatch bending springs (internal_forces): 1 when its springs join consecutive
+  // elements e1 .. e1 + kBatch of one yarn, none on a symmetry plane, and elem_mid is kept (below).
+  std::vector<std::uint8_t> bend_along;
+  double escape_radius2 = 1;   // a node farther than this (squared) from the centre has escaped
+  double damping_k = 0;        // beta E_inst of the snap damping (solver.snap_damping)
+  double crimp_damping_k = 0;  // the same for yarn.crimp_damping
+
+  // --- Per-step scratch: what a stage needs within a step and forgets.
   // Per element, its midpoint this step (x, y, z in three blocks of element_count; double
   // precision with lanes only): written by the element stage, read by the bending lanes.
   std::vector<double> elem_mid;
-  // Per group of kBatch bending springs (internal_forces): 1 when its springs join consecutive
-  // elements e1 .. e1 + kBatch of one yarn, none on a symmetry plane, and elem_mid is kept.
-  std::vector<std::uint8_t> bend_along;
-  std::vector<std::pair<int, Real>> inc_e, inc_b;
-  std::vector<int> inc_e_signed;  // inc_e as e (weight +1) or ~e (weight -1), for the force gather
-  double escape_radius2 = 1;      // a node farther than this (squared) from the centre has escaped
-  double damping_k = 0;           // beta E_inst of the snap damping (solver.snap_damping)
-  double crimp_damping_k = 0;     // the same for yarn.crimp_damping
-
-  // --- Per-step scratch: what a stage needs within a step and forgets.
   std::vector<int> near;                     // projectile_contact: nodes in its bounding box
   std::vector<std::vector<int>> near_part;   // the same, per thread
   std::vector<int> rec_first, rec_last;      // yarn_contact: node bounds of the pass's records, running
