@@ -160,13 +160,28 @@ struct Simulation::Impl {
       fabric_nodes += w;
     }
   }
+  // Broken elements of a family, weighted for the symmetry (every history row asks: the sweep
+  // over the elements is redone only when the solver's count has changed; elements break for
+  // good, so the same solver at a later step with the same count has the same ones).
   int broken_elements(int family) const {
+    const int count = solver->broken_count(family);
+    if (count == 0) return 0;
+    BrokenCache& c = broken_cache[family];
+    if (c.who == solver.get() && c.count == count && solver->steps() >= c.steps) return c.weighted;
     const Model& m = model();
     double n = 0;
     for (int e = 0; e < m.element_count; ++e)
       if (m.yarn_family[m.elem_yarn[e]] == family && solver->broken(e)) n += elem_weight[e];
-    return int(std::lround(n));
+    c = {solver.get(), count, solver->steps(), int(std::lround(n))};
+    return c.weighted;
   }
+  struct BrokenCache {
+    const Solver* who = nullptr;
+    int count = -1;
+    long steps = 0;
+    int weighted = 0;
+  };
+  mutable BrokenCache broken_cache[2];
   // An element's midpoint in the initial configuration, measured in the fabric's plane from
   // the projectile's aim point (or from the nearest clamped edge).
   Vec3d element_mid0(int e) const {
@@ -649,6 +664,7 @@ void Simulation::restore(const std::string& whole) {
   fresh->load_state(r);
   if (!r.at_end()) throw std::runtime_error("checkpoint: trailing bytes");
   impl_->solver = std::move(fresh);
+  impl_->broken_cache[0] = impl_->broken_cache[1] = {};  // (another solver, maybe at the old one's address)
   r.seek(fields_at);
   impl_->history.clear();  // a list: read whole
   impl_io(r, *impl_);

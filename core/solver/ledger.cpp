@@ -64,11 +64,9 @@ double fabric_ke(const Model& model, const State<Real>& s) {
 // trapezoid rule booked before, half with the next step's force, erred by shift x motion:
 // 20 % of the impact energy created over 1.4-3.6 ms of low-friction runs near the limit,
 // where whipping yarn ends were shifted tens of um per step at 200 m/s.)
+// s_.shifted: the shifted nodes in node order (finish_step lists them).
 template <class Real>
 RAVEL_INLINE double Book<Real>::shift_energy() {
-  s_.shifted.clear();  // (finish_step's sweep marked them)
-  for (int i = 0; i < model_.node_count; ++i)
-    if (ctx_.shift_flag[i]) s_.shifted.push_back(i);
   if (s_.shifted.empty()) return 0;
   if (s_.elem_mark.empty()) s_.elem_mark.assign(model_.element_count, 0), s_.bend_mark.assign(model_.bend_k.size(), 0);
   if (++s_.mark == 0) {  // wrapped: clear the marks
@@ -120,28 +118,45 @@ template <class Real>
 void Book<Real>::finish_step() {
   double ke = 0, w_contact = 0, w_friction = 0, w_pfriction = 0, w_compress = 0;
   const int n = model_.node_count;
-  ctx_.shift_flag.resize(n);
   // Yarn-yarn friction and compression act only where yarns cross and slide (the sliding
   // model); the pin-jointed net has no crossings, and their velocity changes stay zero.
   const bool yarn_contact = !model_.crossings.empty();
   const bool compress = ctx_.compressible && yarn_contact;
+  s_.shifted.clear();
+  if (!yarn_contact) {
+    // No crossings (the pin-jointed net, a single yarn): only the projectile's contact moved
+    // nodes or changed their velocities this step, and only on the nodes it touched
+    // (ptouch_list, in node order). The kinetic energy is summed over every node as below; the
+    // contact's work over the touched nodes alone, which leaves out only terms that are zero.
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke) if (ctx_.threads > 1)
+    for (int i = 0; i < n; ++i) ke += 0.5 * model_.mass[i] * double(s_.v[i].squaredNorm());
+    for (int i : s_.ptouch_list) {
+      auto& c = s_.corr[i];
+      w_contact += 0.5 * model_.mass[i] * double(c.dv_contact.dot(s_.v_prev[i] + s_.v[i]));
+      c.dv_contact.setZero();
+      if (c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0))
+        s_.shifted.push_back(i);
+    }
+  } else {
+    ctx_.shift_flag.resize(n);
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (ctx_.threads > 1)
-  for (int i = 0; i < n; ++i) {
-    const double hm = 0.5 * model_.mass[i];
-    ke += hm * double(s_.v[i].squaredNorm());
-    const V3 vsum = s_.v_prev[i] + s_.v[i];
-    auto& c = s_.corr[i];
-    w_contact += hm * double(c.dv_contact.dot(vsum));
-    ctx_.shift_flag[i] = c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0);
-    c.dv_contact.setZero();  // ready for the next step's corrections
-    if (yarn_contact) {
+    for (int i = 0; i < n; ++i) {
+      const double hm = 0.5 * model_.mass[i];
+      ke += hm * double(s_.v[i].squaredNorm());
+      const V3 vsum = s_.v_prev[i] + s_.v[i];
+      auto& c = s_.corr[i];
+      w_contact += hm * double(c.dv_contact.dot(vsum));
+      ctx_.shift_flag[i] = c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0);
+      c.dv_contact.setZero();  // ready for the next step's corrections
       w_friction += hm * double(c.dv_friction.dot(vsum));
       c.dv_friction.setZero();
+      if (compress) {
+        w_compress += hm * double(c.dv_compress.dot(vsum));
+        c.dv_compress.setZero();
+      }
     }
-    if (compress) {
-      w_compress += hm * double(c.dv_compress.dot(vsum));
-      c.dv_compress.setZero();
-    }
+    for (int i = 0; i < n; ++i)
+      if (ctx_.shift_flag[i]) s_.shifted.push_back(i);
   }
   // The projectile's friction touched only the nodes on it (in node order).
   for (int i : s_.ptouch_list) {
