@@ -121,7 +121,6 @@ void Book<Real>::finish_step() {
   // Yarn-yarn friction and compression act only where yarns cross and slide (the sliding
   // model); the pin-jointed net has no crossings, and their velocity changes stay zero.
   const bool yarn_contact = !model_.crossings.empty();
-  const bool compress = ctx_.compressible && yarn_contact;
   s_.shifted.clear();
   if (!yarn_contact) {
     // No crossings (the pin-jointed net, a single yarn): only the projectile's contact moved
@@ -138,25 +137,12 @@ void Book<Real>::finish_step() {
         s_.shifted.push_back(i);
     }
   } else {
-    ctx_.shift_flag.resize(n);
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke, w_contact, w_friction, w_pfriction, w_compress) if (ctx_.threads > 1)
-    for (int i = 0; i < n; ++i) {
-      const double hm = 0.5 * model_.mass[i];
-      ke += hm * double(s_.v[i].squaredNorm());
-      const V3 vsum = s_.v_prev[i] + s_.v[i];
-      auto& c = s_.corr[i];
-      w_contact += hm * double(c.dv_contact.dot(vsum));
-      ctx_.shift_flag[i] = c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0);
-      c.dv_contact.setZero();  // ready for the next step's corrections
-      w_friction += hm * double(c.dv_friction.dot(vsum));
-      c.dv_friction.setZero();
-      if (compress) {
-        w_compress += hm * double(c.dv_compress.dot(vsum));
-        c.dv_compress.setZero();
-      }
-    }
-    for (int i = 0; i < n; ++i)
-      if (ctx_.shift_flag[i]) s_.shifted.push_back(i);
+    // The yarn contact's last pass took these sums over each thread's nodes
+    // (YarnContact::finish_last_pass): summed here in thread order, as a reduction over the
+    // threads' shares would.
+    for (const NodeBook& b : ctx_.node_book)
+      ke += b.ke, w_contact += b.w_contact, w_friction += b.w_friction, w_compress += b.w_compress;
+    for (const auto& part : ctx_.shifted_part) s_.shifted.insert(s_.shifted.end(), part.begin(), part.end());
   }
   // The projectile's friction touched only the nodes on it (in node order).
   for (int i : s_.ptouch_list) {

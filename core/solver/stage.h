@@ -46,6 +46,12 @@ struct alignas(64) ContactTally {
   bool events = false;                     // some crossing has an event to book
 };
 
+// The ledger's sums over one thread's share of the nodes at the end of a step (finish_step:
+// kinetic energy of v(t + dt/2) and the work of the contact's corrections), a cache line each.
+struct alignas(64) NodeBook {
+  double ke = 0, w_contact = 0, w_friction = 0, w_compress = 0;
+};
+
 // One crossing's corrections for one pass of the yarn contact, computed from the same state for
 // every crossing (Jacobi) and applied afterwards in a fixed order: the result does not depend
 // on the order crossings are visited in, nor on the number of threads.
@@ -89,15 +95,16 @@ struct Context {
   // Per element, its midpoint this step (x, y, z in three blocks of element_count; double
   // precision with lanes only): written by the element stage, read by the bending lanes.
   std::vector<double> elem_mid;
-  std::vector<int> near;                     // projectile_contact: nodes in its bounding box
-  std::vector<std::vector<int>> near_part;   // the same, per thread
-  std::vector<int> rec_first, rec_last;      // yarn_contact: node bounds of the pass's records, running
-  std::vector<int> chunk_first, chunk_last;  // the same bounds at the ends of each thread's crossings
-  std::vector<int> batch_bound;              // yarn_contact: the crossing batches thread t takes, [t, t + 1)
-  std::vector<double> batch_busy;            // and the seconds each thread spent on them this step
-  std::vector<Real> moved;                   // yarn_contact: per crossing, the yarns' relative move this step
-  std::vector<ContactTally> tally;           // yarn_contact: the step's sums, per thread
-  std::vector<std::uint8_t> shift_flag;      // finish_step: per node, shifted this step (the ledger's shift work)
+  std::vector<int> near;                       // projectile_contact: nodes in its bounding box
+  std::vector<std::vector<int>> near_part;     // the same, per thread
+  std::vector<int> rec_first, rec_last;        // yarn_contact: node bounds of the pass's records, running
+  std::vector<int> chunk_first, chunk_last;    // the same bounds at the ends of each thread's crossings
+  std::vector<int> batch_bound;                // yarn_contact: the crossing batches thread t takes, [t, t + 1)
+  std::vector<double> batch_busy;              // and the seconds each thread spent on them this step
+  std::vector<Real> moved;                     // yarn_contact: per crossing, the yarns' relative move this step
+  std::vector<ContactTally> tally;             // yarn_contact: the step's sums, per thread
+  std::vector<NodeBook> node_book;             // yarn_contact's last pass: the ledger's node sums, per thread
+  std::vector<std::vector<int>> shifted_part;  // and the nodes it shifted this step, per thread (node order)
   std::vector<CrossingImpulse<Real>> impulses;
   double max_r2 = 0;  // internal_forces' free update: the largest squared distance of a node from the centre
 

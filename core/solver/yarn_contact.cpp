@@ -141,6 +141,9 @@ struct YarnContact {
   void gather(const CrossingImpulse& r, int lo, int hi);
 
   void finish_pass(int lo, int hi);
+  // The last pass's: also the ledger's sums over the nodes (Book::finish_step) into `book`,
+  // and the shifted nodes into `shifted`.
+  void finish_last_pass(int lo, int hi, NodeBook& book, std::vector<int>& shifted);
 
   void apply_impulse(int i, V3 P, V3 Corrections::*acc, bool hold, std::vector<V3>* part);
 
@@ -563,6 +566,9 @@ void YarnContact<Real>::run() {
   const int N = model_.contact_iterations;
   ctx_.moved.resize(nc);
   ctx_.tally.assign(std::max(1, ctx_.threads), ContactTally{});
+  ctx_.node_book.assign(std::max(1, ctx_.threads), NodeBook{});
+  ctx_.shifted_part.resize(std::max(1, ctx_.threads));
+  for (auto& part : ctx_.shifted_part) part.clear();  // (a smaller team leaves some unused)
   ctx_.chunk_first.assign(std::max(1, ctx_.threads), 0);
   ctx_.chunk_last.assign(std::max(1, ctx_.threads), 0);
   ctx_.impulses.resize(nc);  // (each crossing's fn_step, ft, event and comp_u are cleared by its first pass)
@@ -643,7 +649,10 @@ void YarnContact<Real>::run() {
         c_end = int(std::lower_bound(ctx_.rec_first.begin(), ctx_.rec_first.end(), hi) - ctx_.rec_first.begin());
       }
       for (int c = c_first; c < c_end; ++c) gather(ctx_.impulses[c], lo, hi);
-      finish_pass(lo, hi);
+      if (last)
+        finish_last_pass(lo, hi, ctx_.node_book[t], ctx_.shifted_part[t]);
+      else
+        finish_pass(lo, hi);
       if (last) {
         // Once every node has its corrections, per crossing: how far the two yarns'
         // material moved against each other this step, and the step's sums, each thread
@@ -795,6 +804,59 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
     s_.x[i] += dt * dv + dx;
     corr.dx_contact += dx;
   }
+}
+
+// finish_pass of the last pass, with the ledger's sweep over the nodes (Book::finish_step:
+// after this pass nothing changes a node's velocity or corrections until the step ends).
+// Each node's values and each sum's terms are those the ledger's own sweep took, in node
+// order, so the ledger is the same to the bit; the step's velocity changes are cleared here.
+template <class Real>
+RAVEL_INLINE void YarnContact<Real>::finish_last_pass(int lo, int hi, NodeBook& book, std::vector<int>& shifted) {
+  const Real dt = Real(model_.dt);
+  double ke = 0, w_contact = 0, w_friction = 0, w_compress = 0;
+  shifted.clear();
+  for (int i = lo; i < hi; ++i) {
+    const Real im = Real(model_.inv_mass[i]);
+    const std::uint8_t fx = model_.fixed[i];
+    PassSum& sum = s_.pass_sum[i];
+    Corrections& corr = s_.corr[i];
+    V3 dvn = im * sum.n, dvf = im * sum.f, dx = im * sum.s;
+    sum.n.setZero();
+    sum.f.setZero();
+    sum.s.setZero();
+    if (fx) {
+      zero_fixed(dvn, fx);
+      zero_fixed(dvf, fx);
+      zero_fixed(dx, fx);
+    }
+    V3 dv = dvn + dvf, dv_compress = V3::Zero();
+    if (ctx_.compressible) {
+      V3 dvc = im * sum.c;
+      sum.c.setZero();
+      if (fx) zero_fixed(dvc, fx);
+      dv += dvc;
+      dv_compress = corr.dv_compress + dvc;
+    }
+    const V3 v = s_.v[i] + dv;
+    s_.v[i] = v;
+    const V3 dv_contact = corr.dv_contact + dvn, dv_friction = corr.dv_friction + dvf;
+    s_.x[i] += dt * dv + dx;
+    const V3 dxc = corr.dx_contact + dx;
+    corr.dx_contact = dxc;
+    const double hm = 0.5 * model_.mass[i];
+    ke += hm * double(v.squaredNorm());
+    const V3 vsum = s_.v_prev[i] + v;
+    w_contact += hm * double(dv_contact.dot(vsum));
+    if (dxc.x() != Real(0) || dxc.y() != Real(0) || dxc.z() != Real(0)) shifted.push_back(i);
+    corr.dv_contact.setZero();  // ready for the next step's corrections
+    w_friction += hm * double(dv_friction.dot(vsum));
+    corr.dv_friction.setZero();
+    if (ctx_.compressible) {
+      w_compress += hm * double(dv_compress.dot(vsum));
+      corr.dv_compress.setZero();
+    }
+  }
+  book.ke = ke, book.w_contact = w_contact, book.w_friction = w_friction, book.w_compress = w_compress;
 }
 
 // `acc`: where the node's velocity change is summed for the ledger's work of this kind of
