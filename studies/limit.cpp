@@ -495,6 +495,9 @@ const std::vector<FastRuleInfo>& fast_rule_table() {
        "with probe_below: the stopped runs below the bracket stand for probes, which fill only the gaps wider "
        "than probe_step x hi down to lo x (1 - probe_count probe_step), the fixed probes' spacing; they may start "
        "in slots the bracket has no use for once it is narrower than one probe step"},
+      {"decisive_points", &FastRules::decisive_points,
+       "a bracket point within half the tolerance beyond lo + tolerance (or hi - tolerance) is moved just "
+       "inside it, so that its outcome alone ends the search"},
       {"decide_passing", &FastRules::decide_passing,
        "a run ends as perforated once the projectile is passing through (solver.decide_passing: some element "
        "broken, held only by yarns with no intact path to a clamp, and at its present drag it would travel further "

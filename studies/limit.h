@@ -98,6 +98,12 @@ struct FastRules {
   // step, before it reaches the tolerance. Off: probes at the fixed hi x (1 - k probe_step),
   // each stood for only by a run within 1 % of it, once the bracket has converged.
   bool probe_gaps = true;
+  // A bracket point a little more than the tolerance above the stopped end lo (or below the
+  // perforating end hi) is moved to just inside it, by at most half the tolerance:
+  // its perforation (or stop) then ends the search on its own. Left where the prior put it, a
+  // point at lo + 1.0025 tol that perforated first left a bracket a hair wider than the
+  // tolerance, which waited 25 s for the slower run beside it (default scene, 2026-12-07).
+  bool decisive_points = true;
   // Runs end as perforated once the projectile is passing through (the scene key
   // solver.decide_passing, docs/MODEL.md §8): after some element broke, held only by yarns
   // with no intact path to a clamp, and at its present drag it would travel further than the

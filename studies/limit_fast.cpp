@@ -205,6 +205,7 @@ class Engine {
     if (r.reuse_fit_points && with_fit) res_.rules.push_back("reuse_fit_points");
     if (r.probe_below && opt.probe_count > 0) res_.rules.push_back("probe_below");
     if (r.probe_below && opt.probe_count > 0 && r.probe_gaps) res_.rules.push_back("probe_gaps");
+    if (r.decisive_points) res_.rules.push_back("decisive_points");
     if (r.decide_passing) res_.rules.push_back("decide_passing");  // (the runner's scene: add_rule_overrides)
     res_.method = "fast";
     res_.jobs = jobs_;
@@ -346,6 +347,19 @@ class Engine {
     return opt_.max_runs - n;
   }
 
+  // FastRules::decisive_points: v moved just inside lo + tolerance (or hi - tolerance) when it
+  // lies at most half the tolerance beyond, the smaller move if both; kept in (a, b).
+  double decisive(double v, double a, double b) const {
+    if (!opt_.rules.decisive_points) return v;
+    const double tol = opt_.tolerance_mps, reach = 0.5 * tol, inside = 0.999 * tol;
+    const double down = v - (lo_ + inside);  // > 0: a perforation at v leaves hi - lo > tolerance
+    const double up = (hi_ - inside) - v;    // > 0: a stop at v leaves it too
+    double moved = v, by = reach;
+    if (down > 0 && down <= by) moved = v - down, by = down;
+    if (up > 0 && up < by) moved = v + up;
+    return moved > a && moved < b ? moved : v;
+  }
+
   struct Plan {
     double v = -1;
     std::string purpose;
@@ -429,6 +443,7 @@ class Engine {
         for (int i = 1; i <= k; ++i) {
           double v = prior.quantile(double(i) / (k + 1));
           v = std::clamp(v, lo_ + 0.05 * (hi_ - lo_), hi_ - 0.05 * (hi_ - lo_));
+          v = decisive(v, lo_, hi_);
           if (!in_use(v, 0.25 * opt_.tolerance_mps) && !planned(out, v, 0.25 * opt_.tolerance_mps))
             out.push_back({v, "bisect"});
         }
@@ -450,7 +465,7 @@ class Engine {
           if (m > best_mass) {
             best_mass = m;
             double v = prior.quantile(0.5 * (prior.cdf(a) + prior.cdf(b)));
-            best_v = std::clamp(v, a + 0.05 * (b - a), b - 0.05 * (b - a));
+            best_v = decisive(std::clamp(v, a + 0.05 * (b - a), b - 0.05 * (b - a)), a, b);
           }
         }
         if (best_v < 0) break;

@@ -53,6 +53,7 @@ LimitOptions only(bool ksection, bool cancel, bool guess, bool two_sided, bool r
   o.rules.two_sided_start = two_sided;
   o.rules.reuse_fit_points = reuse;
   o.rules.probe_below = false;
+  o.rules.decisive_points = false;
   o.rules.decide_passing = false;  // a scene rule: the synthetic runner has no scene
   return o;
 }
@@ -254,6 +255,8 @@ void expect_probes_stopped(const LimitResult& r, const LimitOptions& o) {
   if (!o.rules.probe_gaps) {
     for (int k = 1; k <= o.probe_count; ++k) {
       const double v = r.hi_mps * (1 - k * o.probe_step);
+      if (v >= r.lo_mps)
+        continue;  // inside a bracket wider than a step: its stopped end lies below (as the search skips it)
       bool stopped_there = false;
       for (const auto& s : r.runs)
         stopped_there |= !s.cancelled && s.decided && !s.perforated && std::abs(s.velocity_mps / v - 1) <= 0.01;
@@ -369,7 +372,10 @@ TEST(FastLimit, ProbeGapsLetBisectionRunsStandForProbes) {
       int gp = 0, fp = 0;
       for (const auto& s : g.runs) gp += s.purpose == "probe" && !s.cancelled;
       for (const auto& s : f.runs) fp += s.purpose == "probe" && !s.cancelled;
-      EXPECT_LE(gp, fp);
+      // (Where the fixed search's bracket is wider than a probe step, as at 12.3 m/s with a 1 m/s
+      // tolerance, its first probe falls inside the bracket and is skipped: it samples less
+      // below the bracket, and the gaps rule may then make one probe more.)
+      if (f.hi_mps - f.lo_mps <= o.probe_step * f.hi_mps) EXPECT_LE(gp, fp);
       gaps_probes += gp;
       fixed_probes += fp;
       if (c.jump) jump_gaps_probes += gp, jump_fixed_probes += fp;
@@ -380,6 +386,52 @@ TEST(FastLimit, ProbeGapsLetBisectionRunsStandForProbes) {
   EXPECT_LT(gaps_s, fixed_s);
   std::printf("probe_gaps: %d probes (%d on the jump targets), %.1f s on the clock; fixed probes: %d (%d), %.1f s\n",
               gaps_probes, jump_gaps_probes, gaps_s, fixed_probes, jump_fixed_probes, fixed_s);
+}
+
+// Rule decisive_points: a point just beyond lo + tolerance (or hi - tolerance) moved inside
+// it ends the search with its own outcome instead of waiting for the run beside it. On every
+// target (threshold laws and residual jumps, runs slowest near the limit), 1 and 2 runs in
+// flight, tolerance 1 and 0.25 m/s: the same verified answer; over them all less time on the
+// clock, and no single search more than 10 % slower (a moved point is a slightly worse split
+// of the prior, which can cost a round where it does not end one).
+TEST(FastLimit, DecisivePointsEndSearchesWithoutWaiting) {
+  std::vector<std::pair<ShootFn, double>> cases;
+  for (const Law& law : kLaws) cases.push_back({target(law.a, law.p, law.vbl, slow_near(law.vbl)), law.vbl});
+  for (double vbl : {44.1, 65.5, 79.5, 107.7}) cases.push_back({target_jump(0.95, vbl, 0.14 * vbl), vbl});
+  double with_s = 0, without_s = 0;
+  int sooner = 0, later = 0, moved = 0;
+  for (const auto& [t, vbl] : cases)
+    for (int jobs : {1, 2})
+      for (double tol : {1.0, 0.25}) {
+        SCOPED_TRACE("vbl " + std::to_string(vbl) + " jobs " + std::to_string(jobs) + " tol " + std::to_string(tol));
+        LimitOptions o;
+        o.jobs = jobs;
+        o.tolerance_mps = tol;
+        o.rules.decide_passing = false;
+        const auto ref = find_ballistic_limit(t, o, true);
+        const auto d = simulate_fast_search(t, o, true);
+        expect_same_answer(d, ref, vbl, tol);
+        EXPECT_NE(std::find(d.rules.begin(), d.rules.end(), "decisive_points"), d.rules.end());
+        o.rules.decisive_points = false;
+        const auto n = simulate_fast_search(t, o, true);
+        expect_same_answer(n, ref, vbl, tol);
+        EXPECT_EQ(std::find(n.rules.begin(), n.rules.end(), "decisive_points"), n.rules.end());
+        EXPECT_LE(d.wall_time_s, 1.10 * n.wall_time_s);
+        with_s += d.wall_time_s;
+        without_s += n.wall_time_s;
+        sooner += d.wall_time_s < n.wall_time_s - 1e-9;
+        later += d.wall_time_s > n.wall_time_s + 1e-9;
+        std::set<double> a, b;
+        for (const auto& s : d.runs) a.insert(s.velocity_mps);
+        for (const auto& s : n.runs) b.insert(s.velocity_mps);
+        moved += a != b;
+      }
+  EXPECT_GT(moved, 0);
+  EXPECT_LT(with_s, without_s);
+  std::printf(
+      "decisive_points: %.1f s on the clock against %.1f s without (%d searches sooner, %d later, %d of %zu "
+      "placed a run elsewhere)\n",
+      with_s, without_s, sooner, later, moved, 4 * cases.size());
 }
 
 // Undecided runs are left out of the bracket (as the reference does), and a failed run
