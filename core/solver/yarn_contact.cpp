@@ -812,6 +812,33 @@ RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
 // order, so the ledger is the same to the bit; the step's velocity changes are cleared here.
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::finish_last_pass(int lo, int hi, NodeBook& book, std::vector<int>& shifted) {
+  if constexpr (std::is_same_v<Real, double>) {
+    if (ctx_.simd) {
+      // The same, a node's x y z in the lanes (contact_lanes.h: finish_nodes, the same bits).
+      static_assert(sizeof(typename State<Real>::PassSum) == 12 * sizeof(double) &&
+                        sizeof(typename State<Real>::Corrections) == 12 * sizeof(double) &&
+                        sizeof(V3) == 3 * sizeof(double),
+                    "finish_nodes reads the sums, corrections and vectors as packed doubles");
+      lanes::NodeFinish f;
+      f.pass_sum = s_.pass_sum[0].n.data();
+      f.corr = s_.corr[0].dv_contact.data();
+      f.v = s_.v[0].data();
+      f.x = s_.x[0].data();
+      f.v_prev = s_.v_prev[0].data();
+      f.inv_mass = model_.inv_mass.data();
+      f.mass = model_.mass.data();
+      f.fixed = model_.fixed.data();
+      f.dt = model_.dt;
+      f.compressible = ctx_.compressible;
+      f.lo = lo, f.hi = hi;
+      shifted.resize(size_t(std::max(0, hi - lo)));
+      f.shifted = shifted.data();
+      lanes::finish_nodes(f);
+      shifted.resize(size_t(f.shifted_count));
+      book.ke = f.ke, book.w_contact = f.w_contact, book.w_friction = f.w_friction, book.w_compress = f.w_compress;
+      return;
+    }
+  }
   const Real dt = Real(model_.dt);
   double ke = 0, w_contact = 0, w_friction = 0, w_compress = 0;
   shifted.clear();

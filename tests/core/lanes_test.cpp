@@ -382,6 +382,57 @@ TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
     EXPECT_EQ(std::memcmp(b[0].held, b[1].held, sizeof b[0].held), 0) << "bend trial " << trial;
   }
   for (int g = 0; g < 3; ++g) EXPECT_GT(regimes[g], 20) << "every regime of the spring should be tried: " << g;
+  // The nodes' end of the last contact pass: random sums, corrections and states, every
+  // fixed-axis combination, with and without the compression law.
+  const int n = 61;
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<double> sum(12 * n), corr(12 * n), v(3 * n), x(3 * n), vp(3 * n), im(n), m(n);
+    std::vector<unsigned char> fixed(n);
+    for (auto* a : {&sum, &corr, &v, &x, &vp})
+      for (double& d : *a) d = rnd() < -0.6 ? 0.0 : rnd();
+    for (int i = 0; i < n; ++i) im[i] = 1 + rnd(), m[i] = 1 / im[i], fixed[i] = (i + trial) % 8;
+    double* arrays[2][6];
+    std::vector<double> copies[2][6];
+    std::vector<int> shifted[2];
+    lanes::NodeFinish f[2];
+    for (int k = 0; k < 2; ++k) {
+      copies[k][0] = sum, copies[k][1] = corr, copies[k][2] = v, copies[k][3] = x;
+      for (int a = 0; a < 4; ++a) arrays[k][a] = copies[k][a].data();
+      shifted[k].assign(n, -1);
+      f[k] = lanes::NodeFinish{arrays[k][0],
+                               arrays[k][1],
+                               arrays[k][2],
+                               arrays[k][3],
+                               vp.data(),
+                               im.data(),
+                               m.data(),
+                               fixed.data(),
+                               6.1e-8,
+                               trial % 2 == 0,
+                               3,
+                               n,
+                               0,
+                               0,
+                               0,
+                               0,
+                               shifted[k].data(),
+                               0};
+    }
+    lanes::avx2::finish_nodes(f[0]);
+    lanes::avx512::finish_nodes(f[1]);
+    for (int a = 0; a < 4; ++a)
+      EXPECT_EQ(std::memcmp(arrays[0][a], arrays[1][a], copies[0][a].size() * sizeof(double)), 0)
+          << "finish trial " << trial << " array " << a;
+    EXPECT_EQ(f[0].shifted_count, f[1].shifted_count);
+    EXPECT_GT(f[0].shifted_count, 0);
+    EXPECT_EQ(shifted[0], shifted[1]);
+    for (auto [p, q] : {std::pair{f[0].ke, f[1].ke},
+                        {f[0].w_contact, f[1].w_contact},
+                        {f[0].w_friction, f[1].w_friction},
+                        {f[0].w_compress, f[1].w_compress}})
+      EXPECT_EQ(std::memcmp(&p, &q, sizeof p), 0) << "finish trial " << trial;
+    EXPECT_EQ(sum[0], copies[0][0][0]) << "nodes below lo are left alone";
+  }
 }
 
 // The run of `base` with the lanes on and off, on one thread and on two: the same state bit

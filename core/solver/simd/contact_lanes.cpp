@@ -44,6 +44,13 @@ void closest4(ClosestBatch& s) {
     avx2::closest4(s);
 }
 
+void finish_nodes(NodeFinish& s) {
+  if (isa() == Isa::avx512)
+    avx512::finish_nodes(s);
+  else
+    avx2::finish_nodes(s);
+}
+
 bool zener4(ElementBatch& s) {
   return isa() == Isa::avx512 ? avx512::zener4(s) : avx2::zener4(s);
 }

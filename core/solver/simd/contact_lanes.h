@@ -46,6 +46,32 @@ struct ClosestBatch {
   long long moved[kWidth];
 };
 
+// The end of the yarn contact's last pass over the nodes [lo, hi) (YarnContact::
+// finish_last_pass): each node's pass sums become its corrections, velocity and position,
+// and the ledger's node sums and shifted nodes are taken (Book::finish_step). One node at a
+// time, its x y z in three lanes of a vector (the fourth unused): the same IEEE operations,
+// component by component and in the same order, as the one-node code, dot products and
+// squared norms summed (x + y) + z as Eigen sums a three-vector; so the same bits.
+struct NodeFinish {
+  // In/out, per node (pointers to node 0 of the solver's arrays): the pass sums n f s c
+  // (12 doubles a node: State::PassSum, cleared here), the step's corrections dv_contact
+  // dv_friction dv_compress dx_contact (12 doubles: State::Corrections; the three velocity
+  // changes are cleared here, booked), velocities and positions (3 doubles a node).
+  double *pass_sum, *corr, *v, *x;
+  // In: velocities before the step (3 a node), inverse masses, masses, fixed axes (FixedAxis).
+  const double *v_prev, *inv_mass, *mass;
+  const unsigned char* fixed;
+  double dt;
+  bool compressible;  // the crossings have a compression law (its sums are used)
+  int lo, hi;
+  // Out: the sums over [lo, hi) in node order (kinetic energy of v(t + dt/2), work of the
+  // contact's, friction's and compression's velocity changes), and the nodes whose dx_contact
+  // is not zero, in order, into `shifted` (room for hi - lo), their number in shifted_count.
+  double ke, w_contact, w_friction, w_compress;
+  int* shifted;
+  int shifted_count;
+};
+
 // The instruction set the lane kernels run with on this processor, chosen once: AVX-512
 // (F, VL, DQ) if it has it, else AVX2, else none. The environment variable RAVEL_LANES=avx2
 // caps the choice at AVX2. Both give the same numbers bit for bit.
@@ -57,14 +83,18 @@ bool available();
 
 // Fills the outputs of all four lanes. Only call when available().
 void closest4(ClosestBatch& s);
+// Only call when available().
+void finish_nodes(NodeFinish& s);
 
 // The kernels of each instruction set, for tests that compare them (call only what the
 // processor has).
 namespace avx2 {
 void closest4(ClosestBatch& s);
-}
+void finish_nodes(NodeFinish& s);
+}  // namespace avx2
 namespace avx512 {
 void closest4(ClosestBatch& s);
-}
+void finish_nodes(NodeFinish& s);
+}  // namespace avx512
 
 }  // namespace ravel::lanes
