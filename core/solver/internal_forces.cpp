@@ -404,34 +404,61 @@ void InternalForces<Real>::run() {
   // Gather, and with each node's force the free update of Eq 1-2 (stage.h: free_update).
   const int n = model_.node_count;
   double max_r2 = 0;
-#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(max : max_r2) if (ctx_.threads > 1)
-  for (int i = 0; i < n; ++i) {
-    V3 f = V3::Zero();
-    // (+1 F is F and -1 F is -F exactly, and f + (-F) is f - F: the same sums as weighing each
-    // element force by its sign, without the multiplications)
-    auto element = [&](int k) {
-      const int c = ctx_.inc_e[k];
-      if (c >= 0)
-        f += s_.elem_force[c];
-      else
-        f -= s_.elem_force[~c];
-    };
-    auto spring = [&](int k) { f += ctx_.inc_b[k].second * s_.bend_force[ctx_.inc_b[k].first]; };
-    const int e0 = ctx_.inc_e_off[i], ne_i = ctx_.inc_e_off[i + 1] - e0;
-    const int b0 = ctx_.inc_b_off[i], nb_i = ctx_.inc_b_off[i + 1] - b0;
-    // A node inside one yarn (2 elements, 2 spring ends) or, pin-jointed, inside two (4 and
-    // 4): the same terms in the same order, unrolled (the loops' control was a third of it).
-    if (ne_i == 2 && nb_i == 2) {
-      element(e0), element(e0 + 1), spring(b0), spring(b0 + 1);
-    } else if (ne_i == 4 && nb_i == 4) {
-      element(e0), element(e0 + 1), element(e0 + 2), element(e0 + 3);
-      spring(b0), spring(b0 + 1), spring(b0 + 2), spring(b0 + 3);
-    } else {
-      for (int k = e0; k < e0 + ne_i; ++k) element(k);
-      for (int k = b0; k < b0 + nb_i; ++k) spring(k);
+  bool gathered = false;
+  if constexpr (std::is_same_v<Real, double>) {
+    if (ctx_.simd) {
+      // The same, a node's x y z in the lanes (element_lanes.h: gather_forces, the same bits).
+      static_assert(sizeof(V3) == 3 * sizeof(double) && sizeof(std::pair<int, Real>) == 16 &&
+                        sizeof(typename State<Real>::Corrections) == 12 * sizeof(double),
+                    "gather_forces reads vectors, spring ends and corrections as packed data");
+      gathered = true;
+#pragma omp parallel num_threads(ctx_.threads) reduction(max : max_r2) if (ctx_.threads > 1)
+      {
+        int lo, hi, t;
+        my_share(n, lo, hi, t);
+        lanes::NodeForces g;
+        g.inc_e_off = ctx_.inc_e_off.data(), g.inc_e = ctx_.inc_e.data(), g.inc_b_off = ctx_.inc_b_off.data();
+        g.inc_b = reinterpret_cast<const char*>(ctx_.inc_b.data());
+        g.elem_force = s_.elem_force.empty() ? nullptr : s_.elem_force[0].data();
+        g.bend_force = s_.bend_force.empty() ? nullptr : s_.bend_force[0].data();
+        g.inv_mass = model_.inv_mass.data(), g.fixed = model_.fixed.data(), g.dt = model_.dt;
+        g.f = s_.f[0].data(), g.v = s_.v[0].data(), g.x = s_.x[0].data(), g.v_prev = s_.v_prev[0].data();
+        g.corr = s_.corr[0].dv_contact.data();
+        g.lo = lo, g.hi = hi;
+        max_r2 = lanes::gather_forces(g, max_r2);
+      }
     }
-    s_.f[i] = f;
-    max_r2 = std::max(max_r2, free_update(model_, s_, i, f));
+  }
+  if (!gathered) {
+#pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(max : max_r2) if (ctx_.threads > 1)
+    for (int i = 0; i < n; ++i) {
+      V3 f = V3::Zero();
+      // (+1 F is F and -1 F is -F exactly, and f + (-F) is f - F: the same sums as weighing each
+      // element force by its sign, without the multiplications)
+      auto element = [&](int k) {
+        const int c = ctx_.inc_e[k];
+        if (c >= 0)
+          f += s_.elem_force[c];
+        else
+          f -= s_.elem_force[~c];
+      };
+      auto spring = [&](int k) { f += ctx_.inc_b[k].second * s_.bend_force[ctx_.inc_b[k].first]; };
+      const int e0 = ctx_.inc_e_off[i], ne_i = ctx_.inc_e_off[i + 1] - e0;
+      const int b0 = ctx_.inc_b_off[i], nb_i = ctx_.inc_b_off[i + 1] - b0;
+      // A node inside one yarn (2 elements, 2 spring ends) or, pin-jointed, inside two (4 and
+      // 4): the same terms in the same order, unrolled (the loops' control was a third of it).
+      if (ne_i == 2 && nb_i == 2) {
+        element(e0), element(e0 + 1), spring(b0), spring(b0 + 1);
+      } else if (ne_i == 4 && nb_i == 4) {
+        element(e0), element(e0 + 1), element(e0 + 2), element(e0 + 3);
+        spring(b0), spring(b0 + 1), spring(b0 + 2), spring(b0 + 3);
+      } else {
+        for (int k = e0; k < e0 + ne_i; ++k) element(k);
+        for (int k = b0; k < b0 + nb_i; ++k) spring(k);
+      }
+      s_.f[i] = f;
+      max_r2 = std::max(max_r2, free_update(model_, s_, i, f));
+    }
   }
   ctx_.max_r2 = max_r2;
   s_.book.stored_now = stored + bend_stored;

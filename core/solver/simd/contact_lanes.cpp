@@ -55,6 +55,10 @@ bool zener4(ElementBatch& s) {
   return isa() == Isa::avx512 ? avx512::zener4(s) : avx2::zener4(s);
 }
 
+double gather_forces(const NodeForces& s, double max_r2) {
+  return isa() == Isa::avx512 ? avx512::gather_forces(s, max_r2) : avx2::gather_forces(s, max_r2);
+}
+
 void bend4(BendBatch& s) {
   if (isa() == Isa::avx512)
     avx512::bend4(s);

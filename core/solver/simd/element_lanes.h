@@ -61,6 +61,30 @@ struct BendBatch {
   double held[kWidth];
 };
 
+// The gather of the element and bending-spring forces into each node's force, and the free
+// update of Eq 1-2 (internal_forces.cpp; stage.h: free_update), for the nodes [lo, hi): one
+// node at a time with its x y z in three lanes of a vector, the same IEEE operations in the
+// same order as the one-node code (its squared distance from the centre summed (x + y) + z).
+struct NodeForces {
+  // In, CSR (Context::inc_e_off / inc_e, inc_b_off / inc_b): a node's elements, e where it
+  // is the element's b (+F) and ~e where it is its a (-F); its spring ends as (spring, weight)
+  // pairs of an int and a double, 16 bytes each. Element and spring forces, 3 doubles each.
+  const int *inc_e_off, *inc_e, *inc_b_off;
+  const char* inc_b;
+  const double *elem_force, *bend_force;
+  const double* inv_mass;
+  const unsigned char* fixed;  // FixedAxis bits
+  double dt;
+  // Out: node forces (3 doubles a node); in/out: velocities, positions; out: v(t - dt/2)
+  // kept in v_prev, and each node's dx_contact cleared (State::Corrections, 12 doubles a node,
+  // dx_contact the last three).
+  double *f, *v, *x, *v_prev, *corr;
+  int lo, hi;
+};
+// Returns std::max, node by node in order from max_r2, of each node's |x|^2 after the update
+// (0 for a node fixed on every axis). Only call when available().
+double gather_forces(const NodeForces& s, double max_r2);
+
 // Updates the four springs (always succeeds). Only call when available().
 void bend4(BendBatch& s);
 
@@ -72,10 +96,12 @@ bool zener4(ElementBatch& s);
 namespace avx2 {
 bool zener4(ElementBatch& s);
 void bend4(BendBatch& s);
+double gather_forces(const NodeForces& s, double max_r2);
 }  // namespace avx2
 namespace avx512 {
 bool zener4(ElementBatch& s);
 void bend4(BendBatch& s);
+double gather_forces(const NodeForces& s, double max_r2);
 }  // namespace avx512
 
 }  // namespace ravel::lanes
