@@ -28,7 +28,9 @@
 //   residual_penetration  every 8th step, the interpenetration left (a diagnostic,
 //                         yarn_contact.cpp)
 //   finish_step           kinetic energy of the half-step velocities, the work of this step's
-//                         corrections (ledger.cpp)
+//                         corrections (ledger.cpp; with crossings the yarn contact's last pass
+//                         takes these node sums as it applies its corrections, one sweep over
+//                         the nodes less; without, only the projectile's nodes carry work)
 //   check_projectile      every 16th step, a projectile gone non-finite or out of the domain
 //                         (faults.cpp; the node and energy checks run inside integrate and
 //                         close_ledger_row)
