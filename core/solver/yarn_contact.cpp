@@ -140,6 +140,10 @@ struct YarnContact {
   // separately, as the hold projects out the part pushing into the projectile.
   void gather(const CrossingImpulse& r, int lo, int hi);
 
+  struct NodeShare {
+    V3 dvn, dvf, dx, dvc;  // velocity changes of the normal, friction and compression parts; shift
+  };
+  NodeShare take_share(int i);
   void finish_pass(int lo, int hi);
   // The last pass's: also the ledger's sums over the nodes (Book::finish_step) into `book`,
   // and the shifted nodes into `shifted`.
@@ -772,31 +776,42 @@ RAVEL_INLINE void YarnContact<Real>::gather(const CrossingImpulse& r, int lo, in
          [&](int i, const V3& p) { apply_impulse(i, p, &Corrections::dv_compress, r.hold, &s_.held_comp); });
 }
 
+// Node i's share of the pass: its sums times 1/m, zero on its fixed axes (dvc only with a
+// compression law); the sums cleared for the next pass.
+template <class Real>
+RAVEL_INLINE auto YarnContact<Real>::take_share(int i) -> NodeShare {
+  const Real im = Real(model_.inv_mass[i]);
+  const std::uint8_t fx = model_.fixed[i];
+  PassSum& sum = s_.pass_sum[i];
+  NodeShare p{im * sum.n, im * sum.f, im * sum.s, V3::Zero()};
+  sum.n.setZero();
+  sum.f.setZero();
+  sum.s.setZero();
+  if (ctx_.compressible) {
+    p.dvc = im * sum.c;
+    sum.c.setZero();
+  }
+  if (fx) {
+    zero_fixed(p.dvn, fx);
+    zero_fixed(p.dvf, fx);
+    zero_fixed(p.dx, fx);
+    zero_fixed(p.dvc, fx);
+  }
+  return p;
+}
+
 // Apply the pass's gathered sums to the nodes in [lo, hi).
 template <class Real>
 RAVEL_INLINE void YarnContact<Real>::finish_pass(int lo, int hi) {
   const Real dt = Real(model_.dt);
   for (int i = lo; i < hi; ++i) {
-    const Real im = Real(model_.inv_mass[i]);
-    const std::uint8_t fx = model_.fixed[i];
-    PassSum& sum = s_.pass_sum[i];
     Corrections& corr = s_.corr[i];
-    V3 dvn = im * sum.n, dvf = im * sum.f, dx = im * sum.s;
-    sum.n.setZero();
-    sum.f.setZero();
-    sum.s.setZero();
-    if (fx) {
-      zero_fixed(dvn, fx);
-      zero_fixed(dvf, fx);
-      zero_fixed(dx, fx);
-    }
+    const NodeShare p = take_share(i);
+    const V3 &dvn = p.dvn, &dvf = p.dvf, &dx = p.dx;
     V3 dv = dvn + dvf;
     if (ctx_.compressible) {
-      V3 dvc = im * sum.c;
-      sum.c.setZero();
-      if (fx) zero_fixed(dvc, fx);
-      dv += dvc;
-      corr.dv_compress += dvc;
+      dv += p.dvc;
+      corr.dv_compress += p.dvc;
     }
     s_.v[i] += dv;
     corr.dv_contact += dvn;
@@ -843,26 +858,13 @@ RAVEL_INLINE void YarnContact<Real>::finish_last_pass(int lo, int hi, NodeBook& 
   double ke = 0, w_contact = 0, w_friction = 0, w_compress = 0;
   shifted.clear();
   for (int i = lo; i < hi; ++i) {
-    const Real im = Real(model_.inv_mass[i]);
-    const std::uint8_t fx = model_.fixed[i];
-    PassSum& sum = s_.pass_sum[i];
     Corrections& corr = s_.corr[i];
-    V3 dvn = im * sum.n, dvf = im * sum.f, dx = im * sum.s;
-    sum.n.setZero();
-    sum.f.setZero();
-    sum.s.setZero();
-    if (fx) {
-      zero_fixed(dvn, fx);
-      zero_fixed(dvf, fx);
-      zero_fixed(dx, fx);
-    }
+    const NodeShare p = take_share(i);
+    const V3 &dvn = p.dvn, &dvf = p.dvf, &dx = p.dx;
     V3 dv = dvn + dvf, dv_compress = V3::Zero();
     if (ctx_.compressible) {
-      V3 dvc = im * sum.c;
-      sum.c.setZero();
-      if (fx) zero_fixed(dvc, fx);
-      dv += dvc;
-      dv_compress = corr.dv_compress + dvc;
+      dv += p.dvc;
+      dv_compress = corr.dv_compress + p.dvc;
     }
     const V3 v = s_.v[i] + dv;
     s_.v[i] = v;
