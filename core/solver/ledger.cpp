@@ -126,7 +126,9 @@ void Book<Real>::finish_step() {
     // No crossings (the pin-jointed net, a single yarn): only the projectile's contact moved
     // nodes or changed their velocities this step, and only on the nodes it touched
     // (ptouch_list, in node order). The kinetic energy is summed over every node as below; the
-    // contact's work over the touched nodes alone, which leaves out only terms that are zero.
+    // contact's work over the touched nodes alone, which leaves out only terms that are zero
+    // (in node order on one thread; at 2+ threads the serial sum can differ in its last bits
+    // from the per-thread sums before, where the touched nodes straddle the threads' shares).
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke) if (ctx_.threads > 1)
     for (int i = 0; i < n; ++i) ke += 0.5 * model_.mass[i] * double(s_.v[i].squaredNorm());
     for (int i : s_.ptouch_list) {
@@ -138,8 +140,10 @@ void Book<Real>::finish_step() {
     }
   } else {
     // The yarn contact's last pass took these sums over each thread's nodes
-    // (YarnContact::finish_last_pass): summed here in thread order, as a reduction over the
-    // threads' shares would.
+    // (YarnContact::finish_last_pass): summed here in thread order. (Its shares are the pass's
+    // node ranges, my_share; with a node count the threads do not divide they split the nodes
+    // elsewhere than the static loop that summed them until 2026-12-08, so at 2+ threads the
+    // ledger's last bits can move against that code. The state does not; 1 thread is the same.)
     for (const NodeBook& b : ctx_.node_book)
       ke += b.ke, w_contact += b.w_contact, w_friction += b.w_friction, w_compress += b.w_compress;
     for (const auto& part : ctx_.shifted_part) s_.shifted.insert(s_.shifted.end(), part.begin(), part.end());

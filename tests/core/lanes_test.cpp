@@ -382,47 +382,41 @@ TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
     EXPECT_EQ(std::memcmp(b[0].held, b[1].held, sizeof b[0].held), 0) << "bend trial " << trial;
   }
   for (int g = 0; g < 3; ++g) EXPECT_GT(regimes[g], 20) << "every regime of the spring should be tried: " << g;
-  // The nodes' end of the last contact pass: random sums, corrections and states, every
-  // fixed-axis combination, with and without the compression law.
-  const int n = 61;
+  // The per-node sweeps (finish_nodes, gather_forces): random states with signed zeros, every
+  // fixed-axis combination, with and without the compression law, and in some trials an
+  // infinity and a NaN; the nodes below lo must stay as they were.
+  const int n = 61, lo = 3;
+  auto value = [&](int trial) {
+    const double r = rnd();
+    if (r < -0.7) return r < -0.85 ? -0.0 : 0.0;
+    if (trial % 5 == 4 && r > 0.995) return r > 0.9975 ? std::numeric_limits<double>::quiet_NaN() : -HUGE_VAL;
+    return rnd();
+  };
+  auto same_bits = [](const std::vector<double>& a, const std::vector<double>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+  };
   for (int trial = 0; trial < 40; ++trial) {
     std::vector<double> sum(12 * n), corr(12 * n), v(3 * n), x(3 * n), vp(3 * n), im(n), m(n);
     std::vector<unsigned char> fixed(n);
     for (auto* a : {&sum, &corr, &v, &x, &vp})
-      for (double& d : *a) d = rnd() < -0.6 ? 0.0 : rnd();
+      for (double& d : *a) d = value(trial);
     for (int i = 0; i < n; ++i) im[i] = 1 + rnd(), m[i] = 1 / im[i], fixed[i] = (i + trial) % 8;
-    double* arrays[2][6];
-    std::vector<double> copies[2][6];
+    std::vector<double> out[2][4];
     std::vector<int> shifted[2];
     lanes::NodeFinish f[2];
     for (int k = 0; k < 2; ++k) {
-      copies[k][0] = sum, copies[k][1] = corr, copies[k][2] = v, copies[k][3] = x;
-      for (int a = 0; a < 4; ++a) arrays[k][a] = copies[k][a].data();
+      out[k][0] = sum, out[k][1] = corr, out[k][2] = v, out[k][3] = x;
       shifted[k].assign(n, -1);
-      f[k] = lanes::NodeFinish{arrays[k][0],
-                               arrays[k][1],
-                               arrays[k][2],
-                               arrays[k][3],
-                               vp.data(),
-                               im.data(),
-                               m.data(),
-                               fixed.data(),
-                               6.1e-8,
-                               trial % 2 == 0,
-                               3,
-                               n,
-                               0,
-                               0,
-                               0,
-                               0,
-                               shifted[k].data(),
-                               0};
+      f[k] = lanes::NodeFinish{};
+      f[k].pass_sum = out[k][0].data(), f[k].corr = out[k][1].data(), f[k].v = out[k][2].data();
+      f[k].x = out[k][3].data(), f[k].v_prev = vp.data(), f[k].inv_mass = im.data(), f[k].mass = m.data();
+      f[k].fixed = fixed.data(), f[k].dt = 6.1e-8, f[k].compressible = trial % 2 == 0;
+      f[k].lo = lo, f[k].hi = n, f[k].shifted = shifted[k].data();
     }
     lanes::avx2::finish_nodes(f[0]);
     lanes::avx512::finish_nodes(f[1]);
     for (int a = 0; a < 4; ++a)
-      EXPECT_EQ(std::memcmp(arrays[0][a], arrays[1][a], copies[0][a].size() * sizeof(double)), 0)
-          << "finish trial " << trial << " array " << a;
+      EXPECT_TRUE(same_bits(out[0][a], out[1][a])) << "finish trial " << trial << " array " << a;
     EXPECT_EQ(f[0].shifted_count, f[1].shifted_count);
     EXPECT_GT(f[0].shifted_count, 0);
     EXPECT_EQ(shifted[0], shifted[1]);
@@ -431,7 +425,47 @@ TEST_F(Lanes, Avx512KernelsMatchAvx2BitForBit) {
                         {f[0].w_friction, f[1].w_friction},
                         {f[0].w_compress, f[1].w_compress}})
       EXPECT_EQ(std::memcmp(&p, &q, sizeof p), 0) << "finish trial " << trial;
-    EXPECT_EQ(sum[0], copies[0][0][0]) << "nodes below lo are left alone";
+    const std::vector<double>* before[4] = {&sum, &corr, &v, &x};
+    for (int a = 0; a < 4; ++a) {
+      const size_t per = a < 2 ? 12 : 3;
+      EXPECT_EQ(std::memcmp(out[0][a].data(), before[a]->data(), per * lo * sizeof(double)), 0)
+          << "finish trial " << trial << ": nodes below lo are left alone";
+    }
+    // The force gather: 2 to 4 elements and springs a node, forces of either sign.
+    std::vector<int> eoff{0}, elem, boff{0};
+    std::vector<char> bend;
+    const int ne = 40, nb = 40;
+    std::vector<double> ef(3 * ne), bf(3 * nb), fo[2], vv[2], xx[2], vpo[2], co[2];
+    for (double& d : ef) d = value(trial);
+    for (double& d : bf) d = value(trial);
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0, c = 2 + (i + trial) % 3; k < c; ++k) {
+        const int e = int((rnd() + 1) * 0.5 * ne) % ne;
+        elem.push_back(rnd() < 0 ? e : ~e);
+      }
+      eoff.push_back(int(elem.size()));
+      for (int k = 0, c = 2 + (i + 2 * trial) % 3; k < c; ++k) {
+        const std::pair<int, double> end{int((rnd() + 1) * 0.5 * nb) % nb, rnd() < 0 ? -0.5 : 0.5};
+        const char* b = reinterpret_cast<const char*>(&end);
+        bend.insert(bend.end(), b, b + sizeof end);
+      }
+      boff.push_back(int(bend.size() / 16));
+    }
+    double r2[2];
+    for (int k = 0; k < 2; ++k) {
+      fo[k].assign(3 * n, 7.0), vv[k] = v, xx[k] = x, vpo[k].assign(3 * n, 7.0), co[k] = corr;
+      lanes::NodeForces g;
+      g.inc_e_off = eoff.data(), g.inc_e = elem.data(), g.inc_b_off = boff.data(), g.inc_b = bend.data();
+      g.elem_force = ef.data(), g.bend_force = bf.data(), g.inv_mass = im.data(), g.fixed = fixed.data();
+      g.dt = 6.1e-8, g.f = fo[k].data(), g.v = vv[k].data(), g.x = xx[k].data(), g.v_prev = vpo[k].data();
+      g.corr = co[k].data(), g.lo = lo, g.hi = n;
+      r2[k] = k == 0 ? lanes::avx2::gather_forces(g, 0.0) : lanes::avx512::gather_forces(g, 0.0);
+    }
+    EXPECT_EQ(std::memcmp(&r2[0], &r2[1], sizeof r2[0]), 0) << "gather trial " << trial;
+    EXPECT_GT(r2[0], 0);
+    for (auto* a : {fo, vv, xx, vpo, co}) EXPECT_TRUE(same_bits(a[0], a[1])) << "gather trial " << trial;
+    EXPECT_EQ(std::memcmp(xx[0].data(), x.data(), 3 * lo * sizeof(double)), 0) << "nodes below lo are left alone";
+    for (int i = lo; i < n; ++i) EXPECT_EQ(co[0][12 * i + 9] + co[0][12 * i + 10] + co[0][12 * i + 11], 0.0);
   }
 }
 
