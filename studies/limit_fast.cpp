@@ -357,7 +357,8 @@ class Engine {
     double moved = v, by = reach;
     if (down > 0 && down <= by) moved = v - down, by = down;
     if (up > 0 && up < by) moved = v + up;
-    return moved > a && moved < b ? moved : v;
+    // (not into the outer twentieth of the gap, where the planner never puts a point)
+    return moved >= a + 0.05 * (b - a) && moved <= b - 0.05 * (b - a) ? moved : v;
   }
 
   struct Plan {
@@ -443,7 +444,11 @@ class Engine {
         for (int i = 1; i <= k; ++i) {
           double v = prior.quantile(double(i) / (k + 1));
           v = std::clamp(v, lo_ + 0.05 * (hi_ - lo_), hi_ - 0.05 * (hi_ - lo_));
-          v = decisive(v, lo_, hi_);
+          // Moved only where no other point of the round lies (two points near lo + tolerance
+          // would both move there, and the second would leave its slot idle).
+          if (const double d = decisive(v, lo_, hi_);
+              !in_use(d, 0.25 * opt_.tolerance_mps) && !planned(out, d, 0.25 * opt_.tolerance_mps))
+            v = d;
           if (!in_use(v, 0.25 * opt_.tolerance_mps) && !planned(out, v, 0.25 * opt_.tolerance_mps))
             out.push_back({v, "bisect"});
         }
