@@ -125,19 +125,13 @@ void Book<Real>::finish_step() {
   if (!yarn_contact) {
     // No crossings (the pin-jointed net, a single yarn): only the projectile's contact moved
     // nodes or changed their velocities this step, and only on the nodes it touched
-    // (ptouch_list, in node order). The kinetic energy is summed over every node as below; the
-    // contact's work over the touched nodes alone, which leaves out only terms that are zero
-    // (in node order on one thread; at 2+ threads the serial sum can differ in its last bits
-    // from the per-thread sums before, where the touched nodes straddle the threads' shares).
+    // (ptouch_list, in node order). The kinetic energy is summed over every node here; the
+    // contact's work over the touched nodes alone (with the projectile's friction, below),
+    // which leaves out only terms that are zero (in node order on one thread; at 2+ threads
+    // the serial sum can differ in its last bits from the per-thread sums before, where the
+    // touched nodes straddle the threads' shares).
 #pragma omp parallel for num_threads(ctx_.threads) schedule(static) reduction(+ : ke) if (ctx_.threads > 1)
     for (int i = 0; i < n; ++i) ke += 0.5 * model_.mass[i] * double(s_.v[i].squaredNorm());
-    for (int i : s_.ptouch_list) {
-      auto& c = s_.corr[i];
-      w_contact += 0.5 * model_.mass[i] * double(c.dv_contact.dot(s_.v_prev[i] + s_.v[i]));
-      c.dv_contact.setZero();
-      if (c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0))
-        s_.shifted.push_back(i);
-    }
   } else {
     // The yarn contact's last pass took these sums over each thread's nodes
     // (YarnContact::finish_last_pass): summed here in thread order. (Its shares are the pass's
@@ -148,9 +142,19 @@ void Book<Real>::finish_step() {
       ke += b.ke, w_contact += b.w_contact, w_friction += b.w_friction, w_compress += b.w_compress;
     for (const auto& part : ctx_.shifted_part) s_.shifted.insert(s_.shifted.end(), part.begin(), part.end());
   }
-  // The projectile's friction touched only the nodes on it (in node order).
+  // The projectile's friction touched only the nodes on it (in node order), and without
+  // crossings so did every contact correction (above).
   for (int i : s_.ptouch_list) {
-    w_pfriction += 0.5 * model_.mass[i] * double(s_.dv_pfriction[i].dot(s_.v_prev[i] + s_.v[i]));
+    const double hm = 0.5 * model_.mass[i];
+    const V3 vsum = s_.v_prev[i] + s_.v[i];
+    if (!yarn_contact) {
+      auto& c = s_.corr[i];
+      w_contact += hm * double(c.dv_contact.dot(vsum));
+      c.dv_contact.setZero();
+      if (c.dx_contact.x() != Real(0) || c.dx_contact.y() != Real(0) || c.dx_contact.z() != Real(0))
+        s_.shifted.push_back(i);
+    }
+    w_pfriction += hm * double(s_.dv_pfriction[i].dot(vsum));
     s_.dv_pfriction[i].setZero();
   }
   s_.ptouch_list.clear();
